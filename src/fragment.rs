@@ -1,0 +1,215 @@
+//! Input fragments: validated color, alpha and depth, quantized once into a [`Row`].
+
+use crate::row::Row;
+use crate::unorm::quantize;
+use glam::{Vec3, Vec4};
+
+/// Why a fragment was rejected. Nothing is clamped or changed silently: a fragment is
+/// either valid as given or refused with one of these.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum FragmentError {
+    /// A color channel is NaN.
+    NanColor,
+    /// A color channel is infinite.
+    InfiniteColor,
+    /// A color channel is negative (`-0.0` is accepted as zero).
+    NegativeColor,
+    /// A premultiplied color channel is above 1 (after multiplying by alpha for the
+    /// straight constructors). Premultiplied color may exceed alpha (additive light), not 1.
+    ColorAboveOne,
+    /// Alpha (or transmittance) is NaN.
+    NanAlpha,
+    /// Alpha (or transmittance) is outside `[0, 1]`.
+    AlphaOutOfRange,
+    /// Depth is NaN.
+    NanDepth,
+    /// Depth is `+infinity` or `-infinity` (`+infinity` is reserved for empty rows).
+    InfiniteDepth,
+}
+
+impl core::fmt::Display for FragmentError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            FragmentError::NanColor => "fragment color is NaN",
+            FragmentError::InfiniteColor => "fragment color is infinite",
+            FragmentError::NegativeColor => "fragment color is negative",
+            FragmentError::ColorAboveOne => "premultiplied fragment color is above 1",
+            FragmentError::NanAlpha => "fragment alpha is NaN",
+            FragmentError::AlphaOutOfRange => "fragment alpha is outside [0, 1]",
+            FragmentError::NanDepth => "fragment depth is NaN",
+            FragmentError::InfiniteDepth => "fragment depth is infinite",
+        })
+    }
+}
+
+impl core::error::Error for FragmentError {}
+
+/// A validated transparent fragment: premultiplied color, alpha (coverage) and depth.
+///
+/// Invariants (checked by every constructor): color channels finite and in `[0, 1]`
+/// (premultiplied; they may exceed alpha, which makes the fragment partly additive), alpha
+/// in `[0, 1]`, depth finite. A fragment with alpha 0 and color above 0 is pure additive
+/// light: it occludes nothing.
+///
+/// The fragment becomes a [`Row`] (8 bits per channel) exactly once, by [`Fragment::row`]:
+/// - color byte = `floor(c * 255 + 0.5)` (f32 multiply, then f32 add, then truncate);
+/// - transmittance byte = `255 - floor(alpha * 255 + 0.5)`, so that a fragment whose color
+///   does not exceed its alpha gives `color byte <= 255 - T byte`;
+/// - depth stored bit for bit (`-0.0` stays `-0.0`; it compares equal to `+0.0`).
+///
+/// The quantization error is at most `0.5 / 255` per channel (plus f32 rounding, below
+/// `1e-7`).
+///
+/// ```
+/// use glam::Vec3;
+/// use mlab::{Fragment, FragmentError, Row};
+/// let f = Fragment::straight(Vec3::new(1.0, 0.5, 0.0), 0.5, 2.0)?;
+/// assert_eq!(f.row(), Row::new([128, 64, 0], 127, 2.0));
+/// assert_eq!(Fragment::premultiplied(Vec3::ONE, 1.5, 2.0), Err(FragmentError::AlphaOutOfRange));
+/// # Ok::<(), FragmentError>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fragment {
+    color: Vec3,
+    alpha: f32,
+    depth: f32,
+}
+
+#[inline]
+fn check_alpha(alpha: f32) -> Result<(), FragmentError> {
+    if alpha.is_nan() {
+        Err(FragmentError::NanAlpha)
+    } else if !(0.0..=1.0).contains(&alpha) {
+        Err(FragmentError::AlphaOutOfRange)
+    } else {
+        Ok(())
+    }
+}
+
+#[inline]
+fn check_color(color: Vec3) -> Result<(), FragmentError> {
+    let c = color.to_array();
+    if c.iter().any(|v| v.is_nan()) {
+        Err(FragmentError::NanColor)
+    } else if c.iter().any(|v| v.is_infinite()) {
+        Err(FragmentError::InfiniteColor)
+    } else if c.iter().any(|&v| v < 0.0) {
+        Err(FragmentError::NegativeColor)
+    } else {
+        Ok(())
+    }
+}
+
+#[inline]
+fn check_depth(depth: f32) -> Result<(), FragmentError> {
+    if depth.is_nan() {
+        Err(FragmentError::NanDepth)
+    } else if depth.is_infinite() {
+        Err(FragmentError::InfiniteDepth)
+    } else {
+        Ok(())
+    }
+}
+
+#[inline]
+fn check_premultiplied(color: Vec3) -> Result<(), FragmentError> {
+    if color.to_array().iter().any(|&v| v > 1.0) {
+        Err(FragmentError::ColorAboveOne)
+    } else {
+        Ok(())
+    }
+}
+
+impl Fragment {
+    /// A fragment from premultiplied color (`color * alpha` already applied), alpha and depth.
+    ///
+    /// Errors are checked in this order: NaN anywhere (depth, alpha, color), then
+    /// infinities, then ranges; the first one found is returned.
+    pub fn premultiplied(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        Self::check_nans(color, alpha, depth)?;
+        check_color(color)?;
+        check_alpha(alpha)?;
+        check_depth(depth)?;
+        check_premultiplied(color)?;
+        Ok(Fragment { color, alpha, depth })
+    }
+
+    /// A fragment from straight (non-premultiplied) color, alpha and depth. The stored color is
+    /// `color * alpha` (one f32 multiply per channel), which must not exceed 1.
+    pub fn straight(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        Self::check_nans(color, alpha, depth)?;
+        check_color(color)?;
+        check_alpha(alpha)?;
+        check_depth(depth)?;
+        let pre = color * alpha;
+        check_premultiplied(pre)?;
+        Ok(Fragment { color: pre, alpha, depth })
+    }
+
+    /// A fragment from premultiplied RGBA (`xyz` = premultiplied color, `w` = alpha).
+    pub fn from_premultiplied_rgba(rgba: Vec4, depth: f32) -> Result<Fragment, FragmentError> {
+        Fragment::premultiplied(rgba.truncate(), rgba.w, depth)
+    }
+
+    /// A fragment from premultiplied color and transmittance `t = 1 - alpha` in `[0, 1]`.
+    /// Alpha is computed as `1 - t` in f32 (exact for `t >= 0.5`).
+    pub fn with_transmittance(color: Vec3, transmittance: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        if transmittance.is_nan() {
+            return Err(FragmentError::NanAlpha);
+        }
+        check_alpha(transmittance)?;
+        Fragment::premultiplied(color, 1.0 - transmittance, depth)
+    }
+
+    /// Pure additive light (alpha 0): adds `light` to whatever lies behind it, occludes nothing.
+    pub fn additive(light: Vec3, depth: f32) -> Result<Fragment, FragmentError> {
+        Fragment::premultiplied(light, 0.0, depth)
+    }
+
+    fn check_nans(color: Vec3, alpha: f32, depth: f32) -> Result<(), FragmentError> {
+        if depth.is_nan() {
+            Err(FragmentError::NanDepth)
+        } else if alpha.is_nan() {
+            Err(FragmentError::NanAlpha)
+        } else if color.is_nan() {
+            Err(FragmentError::NanColor)
+        } else {
+            Ok(())
+        }
+    }
+
+    /// Premultiplied color.
+    #[inline]
+    pub fn color(&self) -> Vec3 {
+        self.color
+    }
+
+    /// Alpha (coverage, `1 - transmittance`).
+    #[inline]
+    pub fn alpha(&self) -> f32 {
+        self.alpha
+    }
+
+    /// Depth.
+    #[inline]
+    pub fn depth(&self) -> f32 {
+        self.depth
+    }
+
+    /// The quantized row (rounding rules in the [type docs](Fragment)).
+    #[inline]
+    pub fn row(&self) -> Row {
+        Row::new(
+            [quantize(self.color.x), quantize(self.color.y), quantize(self.color.z)],
+            255 - quantize(self.alpha),
+            self.depth,
+        )
+    }
+}
+
+impl From<Fragment> for Row {
+    fn from(f: Fragment) -> Row {
+        f.row()
+    }
+}

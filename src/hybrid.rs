@@ -1,0 +1,356 @@
+//! Hybrid Transparency (Maule et al. 2013) as in Listing 2 of Salvi & Vaidyanathan (2014):
+//! `K` head rows hold the `K` nearest fragments exactly; every fragment pushed out of the
+//! head is accumulated into one 8-byte [`Tail`].
+//!
+//! ```text
+//! HT(in Fragment f, inout Fragment B[K], inout Tail T)   // Listing 2
+//!   for i in 0..K:                                      // 1-pass bubble sort
+//!     if f.z <= B[i].z: swap(B[i], f)
+//!   if f carries color or opacity:                      // the paper tests only T != 1,
+//!     T.color += f.A; T.alpha += 1 - f.T; T.count += 1  // which would drop additive light
+//! ```
+//!
+//! Resolve (Bavoil-Myers 2008 for the tail, as Maule et al. 2013): with `n = count`,
+//! `S_a = sum(alpha)`, `S_c = sum(C)`:
+//!
+//! ```text
+//! T_tail = (1 - S_a / n)^n
+//! c_tail = S_c / S_a                                    (the tail's average color)
+//! C      = C_head + T_head * (c_tail * (1 - T_tail) + C_background * T_tail)
+//! ```
+//!
+//! `c_tail * (1 - T_tail) = S_c * g` with `g = (1 - T_tail) / S_a`, which tends to 1 as
+//! `S_a -> 0`; the kernel uses `g = 1` when `S_a = 0`, so a tail of pure additive light
+//! adds its light instead of vanishing (the formula as printed divides by zero there).
+//!
+//! Order independence: the head ends up holding the `K` nearest fragments whatever the
+//! order (for distinct depths), and the tail holds exact integer sums that saturate;
+//! saturating addition of non-negative integers is associative and commutative
+//! (`min(a + b, MAX)` composed in any order is `min(sum, MAX)`), so the bytes of a
+//! [`Hybrid`] do not depend on submission order.
+
+use crate::fragment::Fragment;
+use crate::resolve::{INV255, Resolved, resolve_rows};
+use crate::row::Row;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+
+/// The 8-byte tail of Hybrid Transparency: exact saturating sums over the fragments that
+/// left the head.
+///
+/// | bits of `word0` (bytes 0..4, LE) | field |
+/// |---|---|
+/// | 0..10 | sum of premultiplied R bytes, saturates at 1023 (about 4.01 in color units) |
+/// | 10..20 | sum of premultiplied G bytes, saturates at 1023 |
+/// | 20..30 | sum of premultiplied B bytes, saturates at 1023 |
+/// | 30..32 | spare: ignored on read, preserved on write |
+///
+/// | bits of `word1` (bytes 4..8, LE) | field |
+/// |---|---|
+/// | 0..16 | sum of alpha bytes (`255 - T`), saturates at 65535 (257.0 in alpha units) |
+/// | 16..32 | fragment count, saturates at 65535 |
+///
+/// Units are those of the row: one unit is `1/255`. The all-zero tail is the empty tail.
+///
+/// ```
+/// use mlab::{Row, Tail};
+/// let mut tail = Tail::EMPTY;
+/// tail.add(Row::new([255, 2, 3], 128, 5.0));
+/// assert_eq!(tail.words(), [255 | 2 << 10 | 3 << 20, 127 | 1 << 16]);
+/// assert_eq!(tail.to_bytes(), [0xff, 0x08, 0x30, 0x00, 0x7f, 0x00, 0x01, 0x00]);
+/// ```
+#[repr(C, align(8))]
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Default, Pod, Zeroable)]
+pub struct Tail {
+    word0: [u8; 4],
+    word1: [u8; 4],
+}
+
+const _: () = assert!(core::mem::size_of::<Tail>() == 8);
+const _: () = assert!(core::mem::align_of::<Tail>() == 8);
+
+/// Largest value of a 10-bit color sum.
+pub const TAIL_COLOR_MAX: u32 = 1023;
+/// Largest value of the 16-bit alpha sum and of the count.
+pub const TAIL_ALPHA_MAX: u32 = 65535;
+/// Largest fragment count.
+pub const TAIL_COUNT_MAX: u32 = 65535;
+
+impl Tail {
+    /// No fragment accumulated.
+    pub const EMPTY: Tail = Tail { word0: [0; 4], word1: [0; 4] };
+
+    /// The tail from its two little-endian words.
+    pub const fn from_words(words: [u32; 2]) -> Tail {
+        Tail { word0: words[0].to_le_bytes(), word1: words[1].to_le_bytes() }
+    }
+
+    /// The two words (layout in the [type docs](Tail)).
+    pub const fn words(self) -> [u32; 2] {
+        [u32::from_le_bytes(self.word0), u32::from_le_bytes(self.word1)]
+    }
+
+    /// The tail from 8 bytes.
+    pub const fn from_bytes(b: [u8; 8]) -> Tail {
+        Tail { word0: [b[0], b[1], b[2], b[3]], word1: [b[4], b[5], b[6], b[7]] }
+    }
+
+    /// The 8 bytes.
+    pub const fn to_bytes(self) -> [u8; 8] {
+        let [a, b, c, d] = self.word0;
+        let [e, f, g, h] = self.word1;
+        [a, b, c, d, e, f, g, h]
+    }
+
+    /// A tail from its fields; values above the field maxima saturate. Spare bits are 0.
+    pub fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> Tail {
+        let c = color.map(|v| v.min(TAIL_COLOR_MAX));
+        Tail::from_words([
+            c[0] | c[1] << 10 | c[2] << 20,
+            alpha.min(TAIL_ALPHA_MAX) | count.min(TAIL_COUNT_MAX) << 16,
+        ])
+    }
+
+    /// Sums of premultiplied color bytes `[R, G, B]`.
+    pub const fn color_sum(self) -> [u32; 3] {
+        let w = self.words()[0];
+        [w & 0x3ff, (w >> 10) & 0x3ff, (w >> 20) & 0x3ff]
+    }
+
+    /// Sum of alpha bytes.
+    pub const fn alpha_sum(self) -> u32 {
+        self.words()[1] & 0xffff
+    }
+
+    /// Number of fragments accumulated.
+    pub const fn count(self) -> u32 {
+        self.words()[1] >> 16
+    }
+
+    /// The two spare bits (30 and 31 of `word0`).
+    pub const fn spare(self) -> u32 {
+        self.words()[0] >> 30
+    }
+
+    /// Accumulate a row that left the head, unless it is invisible (no color, `T = 255`).
+    /// Every field saturates. Spare bits are preserved.
+    #[inline]
+    pub fn add(&mut self, row: Row) {
+        if row.is_invisible() {
+            return;
+        }
+        let [r, g, b, t] = row.rgbt();
+        let [cr, cg, cb] = self.color_sum();
+        let w0 = (cr + r as u32).min(TAIL_COLOR_MAX)
+            | (cg + g as u32).min(TAIL_COLOR_MAX) << 10
+            | (cb + b as u32).min(TAIL_COLOR_MAX) << 20
+            | self.spare() << 30;
+        let w1 = (self.alpha_sum() + (255 - t) as u32).min(TAIL_ALPHA_MAX)
+            | (self.count() + 1).min(TAIL_COUNT_MAX) << 16;
+        *self = Tail::from_words([w0, w1]);
+    }
+
+    /// Resolve the tail alone (Bavoil-Myers, see the [module docs](self)).
+    ///
+    /// Any tail bytes give a finite result: color channels in `[0, 1023/255]`,
+    /// transmittance in `[0, 1]` (a mean alpha above 1, possible only in arbitrary bytes,
+    /// is clamped to 1; a zero count with non-zero sums resolves as if the count were 1).
+    #[inline]
+    pub fn resolve(self) -> Resolved {
+        let [cr, cg, cb] = self.color_sum();
+        let n = self.count();
+        let sum_a = self.alpha_sum();
+        if n == 0 && sum_a == 0 && cr == 0 && cg == 0 && cb == 0 {
+            return Resolved::CLEAR;
+        }
+        let n = n.max(1);
+        let s_a = sum_a as f32 * INV255;
+        let mean = (s_a / n as f32).min(1.0);
+        let t_tail = powi(1.0 - mean, n);
+        let g = if sum_a == 0 { 1.0 } else { (1.0 - t_tail) / s_a };
+        let sum_c = Vec3::new(cr as f32, cg as f32, cb as f32) * INV255;
+        Resolved { color: sum_c * g, transmittance: t_tail }
+    }
+}
+
+/// `x^n` by binary exponentiation over the 16 bits of `n` (`n <= 65535`), in a fixed
+/// sequence of f32 multiplies that the lane kernel repeats (`core` has no `powi`).
+#[inline]
+pub fn powi(x: f32, n: u32) -> f32 {
+    let mut result = 1.0f32;
+    let mut base = x;
+    let mut e = n;
+    for _ in 0..16 {
+        if e & 1 != 0 {
+            result *= base;
+        }
+        base *= base;
+        e >>= 1;
+    }
+    result
+}
+
+impl core::fmt::Debug for Tail {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "Tail {{ color: {:?}, alpha: {}, count: {}, spare: {} }}",
+            self.color_sum(),
+            self.alpha_sum(),
+            self.count(),
+            self.spare()
+        )
+    }
+}
+
+/// Listing 2 on `K` head rows and a tail: insert `row` into the head, accumulate the row
+/// pushed out into the tail. `K = 0` is allowed (every fragment goes to the tail).
+#[inline]
+pub fn insert<const K: usize>(head: &mut [Row; K], tail: &mut Tail, row: Row) {
+    let mut f = row;
+    for slot in head.iter_mut() {
+        if f.depth() <= slot.depth() {
+            core::mem::swap(slot, &mut f);
+        }
+    }
+    tail.add(f);
+}
+
+/// Resolve head and tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`, where
+/// the head is Eq. 5 over its rows and the tail is [`Tail::resolve`].
+#[inline]
+pub fn resolve(head: &[Row], tail: Tail) -> Resolved {
+    let h = resolve_rows(head);
+    let t = tail.resolve();
+    Resolved {
+        color: h.color + t.color * h.transmittance,
+        transmittance: h.transmittance * t.transmittance,
+    }
+}
+
+/// A Hybrid Transparency pixel: `K` head rows and a tail, `8 * (K + 1)` bytes.
+///
+/// ```
+/// use glam::Vec3;
+/// use mlab::{Fragment, Hybrid};
+/// let mut h = Hybrid::<1>::new();
+/// h.insert(&Fragment::straight(Vec3::X, 0.5, 1.0)?);
+/// h.insert(&Fragment::straight(Vec3::Y, 0.5, 2.0)?); // goes to the tail
+/// assert_eq!(h.tail().count(), 1);
+/// let px = h.resolve().over(Vec3::ZERO);
+/// assert!((px - Vec3::new(0.5, 0.25, 0.0)).abs().max_element() < 2.0 / 255.0);
+/// # Ok::<(), mlab::FragmentError>(())
+/// ```
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+#[repr(C)]
+pub struct Hybrid<const K: usize> {
+    head: [Row; K],
+    tail: Tail,
+}
+
+impl<const K: usize> Hybrid<K> {
+    /// Size in bytes (`8 * (K + 1)`).
+    pub const BYTES: usize = 8 * (K + 1);
+
+    /// Empty head rows and an empty tail.
+    pub const fn new() -> Self {
+        Hybrid { head: [Row::EMPTY; K], tail: Tail::EMPTY }
+    }
+
+    /// From stored head rows and tail (any bytes are accepted).
+    pub const fn from_parts(head: [Row; K], tail: Tail) -> Self {
+        Hybrid { head, tail }
+    }
+
+    /// Head rows, front to back.
+    pub const fn head(&self) -> &[Row; K] {
+        &self.head
+    }
+
+    /// The tail.
+    pub const fn tail(&self) -> Tail {
+        self.tail
+    }
+
+    /// Reset.
+    pub fn clear(&mut self) {
+        *self = Self::new();
+    }
+
+    /// Insert a validated fragment with Listing 2.
+    #[inline]
+    pub fn insert(&mut self, fragment: &Fragment) {
+        insert(&mut self.head, &mut self.tail, fragment.row());
+    }
+
+    /// Insert an already quantized row with Listing 2.
+    #[inline]
+    pub fn insert_row(&mut self, row: Row) {
+        insert(&mut self.head, &mut self.tail, row);
+    }
+
+    /// Resolve head and tail ([`resolve`]).
+    #[inline]
+    pub fn resolve(&self) -> Resolved {
+        resolve(&self.head, self.tail)
+    }
+}
+
+impl<const K: usize> Default for Hybrid<K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn powi_matches_repeated_multiplication_for_small_n() {
+        for n in 0..40u32 {
+            let mut expect = 1.0f64;
+            for _ in 0..n {
+                expect *= 0.9;
+            }
+            assert!((powi(0.9, n) as f64 - expect).abs() < 1e-5, "n = {n}");
+        }
+        assert_eq!(powi(0.0, 0), 1.0);
+        assert_eq!(powi(1.0, 65535), 1.0);
+        assert_eq!(powi(0.5, 65535), 0.0);
+    }
+
+    #[test]
+    fn tail_saturates_instead_of_wrapping() {
+        let mut t = Tail::EMPTY;
+        for _ in 0..10 {
+            t.add(Row::new([255, 0, 128], 0, 1.0));
+        }
+        assert_eq!(t.color_sum(), [1023, 0, 1023]);
+        assert_eq!(t.alpha_sum(), 2550);
+        assert_eq!(t.count(), 10);
+        let mut t = Tail::from_words([0, 0xffff_ffff]);
+        t.add(Row::new([0, 0, 0], 0, 1.0));
+        assert_eq!((t.alpha_sum(), t.count()), (65535, 65535));
+    }
+
+    #[test]
+    fn tail_skips_only_invisible_rows_and_keeps_spare_bits() {
+        let mut t = Tail::from_words([3 << 30, 0]);
+        t.add(Row::EMPTY);
+        t.add(Row::new([0, 0, 0], 255, 1.0));
+        assert_eq!(t, Tail::from_words([3 << 30, 0]));
+        t.add(Row::new([9, 0, 0], 255, 1.0)); // additive light is kept
+        assert_eq!((t.color_sum(), t.alpha_sum(), t.count(), t.spare()), ([9, 0, 0], 0, 1, 3));
+    }
+
+    #[test]
+    fn additive_tail_adds_its_light() {
+        let mut t = Tail::EMPTY;
+        t.add(Row::new([51, 0, 0], 255, 1.0));
+        t.add(Row::new([51, 0, 0], 255, 2.0));
+        let r = t.resolve();
+        assert_eq!(r.transmittance, 1.0);
+        assert!((r.color.x - 102.0 / 255.0).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,58 @@
+//! # mlab
+//!
+//! A `no_std`, allocation-free compositing kernel for order-independent transparency:
+//! Multi-Layer Alpha Blending (MLAB; Salvi & Vaidyanathan, *Multi-Layer Alpha Blending*,
+//! I3D 2014) and Hybrid Transparency (HT; Maule et al. 2013, in the single-pass form of
+//! the same paper), over packed 8-byte rows.
+//!
+//! | type | what | size |
+//! |---|---|---|
+//! | [`Row`] | premultiplied RGB8 + transmittance T8 + depth f32 | 8 bytes, align 8 |
+//! | [`Tail`] | HT tail: color sums 3 x 10 bit, alpha sum 16 bit, count 16 bit | 8 bytes, align 8 |
+//! | [`BlendingArray<M>`] | MLAB blending array, `M >= 1` rows | `8 * M` bytes |
+//! | [`Hybrid<K>`] | HT: `K` head rows + tail | `8 * (K + 1)` bytes |
+//! | [`MlabFramebuffer`], [`HybridFramebuffer`] | views over caller-owned `&mut [Row]` | none |
+//!
+//! - [`mlab::insert`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
+//!   [`resolve_rows`] is Eq. 5 and [`Resolved::over`] Eq. 6.
+//! - Fragments are validated once ([`Fragment`], typed [`FragmentError`]) and quantized once.
+//! - The merge is exact unorm8 integer arithmetic (`round(a * b / 255)`), reproducible on
+//!   any machine and in a shader.
+//!
+//! ```
+//! use glam::Vec3;
+//! use mlab::{BlendingArray, Fragment};
+//!
+//! let mut pixel = BlendingArray::<4>::new();
+//! // Submitted back to front, red behind blue; MLAB sorts them.
+//! pixel.insert(&Fragment::straight(Vec3::new(0.0, 0.0, 1.0), 0.5, 1.0)?);
+//! pixel.insert(&Fragment::straight(Vec3::new(1.0, 0.0, 0.0), 0.5, 2.0)?);
+//! let color = pixel.resolve().over(Vec3::ONE);
+//! // blue*0.5 + red*0.25 + white*0.25
+//! assert!((color - Vec3::new(0.5, 0.25, 0.75)).abs().max_element() < 2.0 / 255.0);
+//! # Ok::<(), mlab::FragmentError>(())
+//! ```
+//!
+//! See `docs/layout.md` and `docs/algorithm.md` in the repository.
+
+#![no_std]
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+pub mod fragment;
+pub mod framebuffer;
+pub mod hybrid;
+pub mod mlab;
+pub mod resolve;
+pub mod row;
+pub mod unorm;
+
+pub use fragment::{Fragment, FragmentError};
+pub use framebuffer::{FramebufferError, HybridFramebuffer, MlabFramebuffer};
+pub use hybrid::{Hybrid, Tail};
+pub use mlab::BlendingArray;
+pub use resolve::{Background, Resolved, resolve_rows, to_rgba8, to_rgba16f};
+pub use row::Row;
+
+pub use glam;
+pub use half;

@@ -1,0 +1,166 @@
+//! Multi-Layer Alpha Blending: the blending array and Listing 1 of Salvi & Vaidyanathan (2014).
+//!
+//! ```text
+//! MLAB(in Fragment f, inout Fragment B[m+1])          // Listing 1 (paper, section 4)
+//!   for i in 0..m:                                    // 1-pass bubble sort
+//!     if f.z <= B[i].z: swap(B[i], f)
+//!   B[m-1] = merge(B[m-1], f)                         // f is now the row pushed out (B[m])
+//!
+//! merge(front, back):                                 // Eq. 7 and 8, section 3.2
+//!   A = A_front + A_back * T_front
+//!   T = T_front * T_back
+//!   z = z_front
+//! ```
+//!
+//! Arithmetic: the merge runs in exact unorm8 integers ([`crate::unorm`]): each product is
+//! `round(a * b / 255)`, the color sum saturates at 255. It is deterministic, needs no
+//! floating point, and a shader reproduces it bit for bit. Merging with the empty row is
+//! the identity, so an array that is not full needs no special case.
+//!
+//! Invariants kept by [`insert`] for any stream of valid fragments (finite depth): rows
+//! sorted by depth front to back (non-decreasing `z`), rows at `z = +infinity` are
+//! [`Row::EMPTY`] and only at the back.
+
+use crate::fragment::Fragment;
+use crate::resolve::{Resolved, resolve_rows};
+use crate::row::Row;
+use crate::unorm::mul;
+
+/// Compile-time check that a blending array has at least one row.
+pub(crate) struct AtLeastOne<const M: usize>;
+impl<const M: usize> AtLeastOne<M> {
+    pub(crate) const OK: () = assert!(M >= 1, "an MLAB blending array needs at least one row (M >= 1)");
+}
+
+/// Merge two neighbouring rows into one (paper Eq. 7 and 8): `front` is nearer.
+///
+/// `A = A_front + round(A_back * T_front / 255)` per channel, saturating at 255;
+/// `T = round(T_front * T_back / 255)`; `z = z_front`.
+///
+/// ```
+/// use mlab::{Row, mlab::merge};
+/// let front = Row::new([100, 0, 0], 128, 1.0);
+/// let back = Row::new([0, 200, 0], 0, 2.0);
+/// assert_eq!(merge(front, back), Row::new([100, 100, 0], 0, 1.0));
+/// assert_eq!(merge(front, Row::EMPTY), front);
+/// ```
+#[inline(always)]
+pub fn merge(front: Row, back: Row) -> Row {
+    let [ar, ag, ab, at] = front.rgbt();
+    let [br, bg, bb, bt] = back.rgbt();
+    Row::new(
+        [
+            ar.saturating_add(mul(br, at)),
+            ag.saturating_add(mul(bg, at)),
+            ab.saturating_add(mul(bb, at)),
+        ],
+        mul(at, bt),
+        front.depth(),
+    )
+}
+
+/// Listing 1 on a blending array of `M` rows: insert `row`, then merge the last two rows.
+///
+/// The comparison is the paper's `f.z <= B[i].z` in IEEE f32: a new fragment goes in front
+/// of rows at equal depth (so coplanar fragments blend like OVER in submission order), and
+/// a NaN depth (only possible in rows read from arbitrary bytes) never compares true.
+///
+/// Rows read from arbitrary bytes (unsorted, NaN depth) are processed by the same steps;
+/// the result is deterministic and never panics, but the invariants only hold if they held
+/// before.
+#[inline]
+pub fn insert<const M: usize>(rows: &mut [Row; M], row: Row) {
+    let () = AtLeastOne::<M>::OK;
+    let mut f = row;
+    for slot in rows.iter_mut() {
+        if f.depth() <= slot.depth() {
+            core::mem::swap(slot, &mut f);
+        }
+    }
+    // `f` is the row pushed out of the array (B[m] in the listing).
+    if let Some(last) = rows.last_mut() {
+        *last = merge(*last, f);
+    }
+}
+
+/// A blending array of `M >= 1` rows (`8 * M` bytes), sorted front to back.
+///
+/// `M = 0` is a compile-time error.
+///
+/// ```
+/// use glam::Vec3;
+/// use mlab::{BlendingArray, Fragment};
+/// let mut b = BlendingArray::<2>::new();
+/// // Three fragments out of order into two rows: the back two are merged.
+/// for (c, a, z) in [(Vec3::X, 0.5, 2.0), (Vec3::Y, 0.5, 1.0), (Vec3::Z, 0.5, 3.0)] {
+///     b.insert(&Fragment::straight(c, a, z)?);
+/// }
+/// let px = b.resolve().over(Vec3::ZERO);
+/// // Front to back: green (1.0), red (2.0), blue (3.0), each alpha 0.5.
+/// assert!((px - Vec3::new(0.25, 0.5, 0.125)).abs().max_element() < 3.0 / 255.0);
+/// # Ok::<(), mlab::FragmentError>(())
+/// ```
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
+#[repr(transparent)]
+pub struct BlendingArray<const M: usize> {
+    rows: [Row; M],
+}
+
+impl<const M: usize> BlendingArray<M> {
+    /// Number of rows.
+    pub const ROWS: usize = M;
+    /// Size in bytes (`8 * M`).
+    pub const BYTES: usize = 8 * M;
+
+    /// An array of empty rows.
+    pub const fn new() -> Self {
+        let () = AtLeastOne::<M>::OK;
+        BlendingArray { rows: [Row::EMPTY; M] }
+    }
+
+    /// An array over given rows (for example read back from a GPU buffer). Any rows are
+    /// accepted; see [`insert`] for what unsorted rows do.
+    pub const fn from_rows(rows: [Row; M]) -> Self {
+        let () = AtLeastOne::<M>::OK;
+        BlendingArray { rows }
+    }
+
+    /// The rows, front to back.
+    pub const fn rows(&self) -> &[Row; M] {
+        &self.rows
+    }
+
+    /// The rows, mutable.
+    pub fn rows_mut(&mut self) -> &mut [Row; M] {
+        &mut self.rows
+    }
+
+    /// Reset to empty rows.
+    pub fn clear(&mut self) {
+        self.rows = [Row::EMPTY; M];
+    }
+
+    /// Insert a validated fragment (quantized here, once) with Listing 1.
+    #[inline]
+    pub fn insert(&mut self, fragment: &Fragment) {
+        insert(&mut self.rows, fragment.row());
+    }
+
+    /// Insert an already quantized row with Listing 1.
+    #[inline]
+    pub fn insert_row(&mut self, row: Row) {
+        insert(&mut self.rows, row);
+    }
+
+    /// Resolve (paper Eq. 5 and 6), see [`resolve_rows`].
+    #[inline]
+    pub fn resolve(&self) -> Resolved {
+        resolve_rows(&self.rows)
+    }
+}
+
+impl<const M: usize> Default for BlendingArray<M> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
