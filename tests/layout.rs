@@ -1,0 +1,44 @@
+//! 9. Layout: rows and tails pinned to literal bytes; size and alignment asserted.
+
+use mlab::{Hybrid, Row, Tail};
+
+#[test]
+fn row_layout_is_pinned() {
+    assert_eq!(core::mem::size_of::<Row>(), 8);
+    assert_eq!(core::mem::align_of::<Row>(), 8);
+    let row = Row::new([0x11, 0x22, 0x33], 0x44, f32::from_bits(0x8877_6655));
+    assert_eq!(row.to_bytes(), [0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88]);
+    assert_eq!(bytemuck::bytes_of(&row), &[0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88]);
+    assert_eq!(row.words(), [0x4433_2211, 0x8877_6655]);
+    assert_eq!(Row::from_words([0x4433_2211, 0x8877_6655]), row);
+    assert_eq!(Row::from_bytes(row.to_bytes()), row);
+    // The empty row: color 0, T = 255, z = +inf (0x7f800000 little-endian).
+    assert_eq!(Row::EMPTY.to_bytes(), [0, 0, 0, 255, 0x00, 0x00, 0x80, 0x7f]);
+    assert_eq!(Row::default(), Row::EMPTY);
+    // Zeroed is opaque black at depth 0, not empty.
+    assert_ne!(<Row as bytemuck::Zeroable>::zeroed(), Row::EMPTY);
+}
+
+#[test]
+fn tail_layout_is_pinned() {
+    assert_eq!(core::mem::size_of::<Tail>(), 8);
+    assert_eq!(core::mem::align_of::<Tail>(), 8);
+    let t = Tail::from_sums([1023, 0x155, 1], 0xbeef, 0x1234);
+    // word0 = R | G << 10 | B << 20, word1 = alpha | count << 16, little-endian.
+    assert_eq!(t.words(), [1023 | 0x155 << 10 | 1 << 20, 0x1234_beef]);
+    assert_eq!(t.to_bytes(), [0xff, 0x57, 0x15, 0x00, 0xef, 0xbe, 0x34, 0x12]);
+    assert_eq!(bytemuck::bytes_of(&t), &t.to_bytes());
+    assert_eq!(Tail::EMPTY.to_bytes(), [0; 8]);
+    assert_eq!(Tail::from_bytes(t.to_bytes()), t);
+    // Fields saturate at construction.
+    assert_eq!(Tail::from_sums([5000, 0, 0], 1 << 20, 1 << 20).words(), [1023, 0xffff_ffff]);
+}
+
+#[test]
+fn array_sizes() {
+    assert_eq!(core::mem::size_of::<mlab::BlendingArray<4>>(), 32);
+    assert_eq!(mlab::BlendingArray::<4>::BYTES, 32);
+    assert_eq!(core::mem::size_of::<Hybrid<3>>(), 32);
+    assert_eq!(Hybrid::<3>::BYTES, 32);
+    assert_eq!(core::mem::size_of::<[Row; 8]>(), 64);
+}
