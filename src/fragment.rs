@@ -144,7 +144,11 @@ impl Fragment {
         check_depth(depth)?;
         let pre = color * alpha;
         check_premultiplied(pre)?;
-        Ok(Fragment { color: pre, alpha, depth })
+        Ok(Fragment {
+            color: pre,
+            alpha,
+            depth,
+        })
     }
 
     /// A fragment from premultiplied RGBA (`xyz` = premultiplied color, `w` = alpha).

@@ -102,7 +102,10 @@ impl Dims {
             .and_then(|p| p.checked_mul(rows_per_pixel))
             .ok_or(FramebufferError::SizeOverflow)?;
         if expected != storage_len {
-            return Err(FramebufferError::StorageLength { expected, actual: storage_len });
+            return Err(FramebufferError::StorageLength {
+                expected,
+                actual: storage_len,
+            });
         }
         Ok(())
     }
@@ -110,7 +113,12 @@ impl Dims {
     /// Pixel index of `(x, y)`.
     fn index(self, x: u32, y: u32) -> Result<usize, FramebufferError> {
         if x >= self.width || y >= self.height {
-            return Err(FramebufferError::OutOfBounds { x, y, width: self.width, height: self.height });
+            return Err(FramebufferError::OutOfBounds {
+                x,
+                y,
+                width: self.width,
+                height: self.height,
+            });
         }
         Ok(y as usize * self.width as usize + x as usize)
     }
@@ -212,8 +220,11 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
         let () = mlab::AtLeastOne::<M>::OK;
         let actual = storage.len();
         // Cannot fail: the length is a multiple of M >= 1 and the alignment is Row's.
-        let pixels: &mut [[Row; M]] = bytemuck::try_cast_slice_mut(storage)
-            .map_err(|_| FramebufferError::StorageLength { expected: actual, actual })?;
+        let pixels: &mut [[Row; M]] =
+            bytemuck::try_cast_slice_mut(storage).map_err(|_| FramebufferError::StorageLength {
+                expected: actual,
+                actual,
+            })?;
         Ok(MlabFramebuffer { pixels, dims })
     }
 
@@ -249,14 +260,24 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
     /// The blending array of pixel `(x, y)`.
     pub fn pixel(&self, x: u32, y: u32) -> Result<&[Row; M], FramebufferError> {
         let i = self.dims.index(x, y)?;
-        self.pixels.get(i).ok_or(FramebufferError::OutOfBounds { x, y, width: self.dims.width, height: self.dims.height })
+        self.pixels.get(i).ok_or(FramebufferError::OutOfBounds {
+            x,
+            y,
+            width: self.dims.width,
+            height: self.dims.height,
+        })
     }
 
     /// The blending array of pixel `(x, y)`, mutable.
     pub fn pixel_mut(&mut self, x: u32, y: u32) -> Result<&mut [Row; M], FramebufferError> {
         let i = self.dims.index(x, y)?;
         let d = self.dims;
-        self.pixels.get_mut(i).ok_or(FramebufferError::OutOfBounds { x, y, width: d.width, height: d.height })
+        self.pixels.get_mut(i).ok_or(FramebufferError::OutOfBounds {
+            x,
+            y,
+            width: d.width,
+            height: d.height,
+        })
     }
 
     /// Resolve one pixel (Eq. 5).
@@ -328,7 +349,12 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
         let d = self.dims;
         self.rows
             .get(i * (K + 1)..(i + 1) * (K + 1))
-            .ok_or(FramebufferError::OutOfBounds { x, y, width: d.width, height: d.height })
+            .ok_or(FramebufferError::OutOfBounds {
+                x,
+                y,
+                width: d.width,
+                height: d.height,
+            })
     }
 
     /// Insert a fragment at `(x, y)` with Listing 2.

@@ -78,11 +78,17 @@ pub const TAIL_COUNT_MAX: u32 = 65535;
 
 impl Tail {
     /// No fragment accumulated.
-    pub const EMPTY: Tail = Tail { word0: [0; 4], word1: [0; 4] };
+    pub const EMPTY: Tail = Tail {
+        word0: [0; 4],
+        word1: [0; 4],
+    };
 
     /// The tail from its two little-endian words.
     pub const fn from_words(words: [u32; 2]) -> Tail {
-        Tail { word0: words[0].to_le_bytes(), word1: words[1].to_le_bytes() }
+        Tail {
+            word0: words[0].to_le_bytes(),
+            word1: words[1].to_le_bytes(),
+        }
     }
 
     /// The two words (layout in the [type docs](Tail)).
@@ -92,7 +98,10 @@ impl Tail {
 
     /// The tail from 8 bytes.
     pub const fn from_bytes(b: [u8; 8]) -> Tail {
-        Tail { word0: [b[0], b[1], b[2], b[3]], word1: [b[4], b[5], b[6], b[7]] }
+        Tail {
+            word0: [b[0], b[1], b[2], b[3]],
+            word1: [b[4], b[5], b[6], b[7]],
+        }
     }
 
     /// The 8 bytes.
@@ -145,8 +154,8 @@ impl Tail {
             | (cg + g as u32).min(TAIL_COLOR_MAX) << 10
             | (cb + b as u32).min(TAIL_COLOR_MAX) << 20
             | self.spare() << 30;
-        let w1 = (self.alpha_sum() + (255 - t) as u32).min(TAIL_ALPHA_MAX)
-            | (self.count() + 1).min(TAIL_COUNT_MAX) << 16;
+        let w1 =
+            (self.alpha_sum() + (255 - t) as u32).min(TAIL_ALPHA_MAX) | (self.count() + 1).min(TAIL_COUNT_MAX) << 16;
         *self = Tail::from_words([w0, w1]);
     }
 
@@ -169,7 +178,10 @@ impl Tail {
         let t_tail = powi(1.0 - mean, n);
         let g = if sum_a == 0 { 1.0 } else { (1.0 - t_tail) / s_a };
         let sum_c = Vec3::new(cr as f32, cg as f32, cb as f32) * INV255;
-        Resolved { color: sum_c * g, transmittance: t_tail }
+        Resolved {
+            color: sum_c * g,
+            transmittance: t_tail,
+        }
     }
 }
 
@@ -254,7 +266,10 @@ impl<const K: usize> Hybrid<K> {
 
     /// Empty head rows and an empty tail.
     pub const fn new() -> Self {
-        Hybrid { head: [Row::EMPTY; K], tail: Tail::EMPTY }
+        Hybrid {
+            head: [Row::EMPTY; K],
+            tail: Tail::EMPTY,
+        }
     }
 
     /// From stored head rows and tail (any bytes are accepted).
@@ -341,7 +356,10 @@ mod tests {
         t.add(Row::new([0, 0, 0], 255, 1.0));
         assert_eq!(t, Tail::from_words([3 << 30, 0]));
         t.add(Row::new([9, 0, 0], 255, 1.0)); // additive light is kept
-        assert_eq!((t.color_sum(), t.alpha_sum(), t.count(), t.spare()), ([9, 0, 0], 0, 1, 3));
+        assert_eq!(
+            (t.color_sum(), t.alpha_sum(), t.count(), t.spare()),
+            ([9, 0, 0], 0, 1, 3)
+        );
     }
 
     #[test]

@@ -56,3 +56,8 @@ pub use row::Row;
 
 pub use glam;
 pub use half;
+
+/// The README's example is compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctest;

@@ -35,7 +35,10 @@ pub struct Resolved {
 
 impl Resolved {
     /// Nothing drawn: color 0, background fully visible.
-    pub const CLEAR: Resolved = Resolved { color: Vec3::ZERO, transmittance: 1.0 };
+    pub const CLEAR: Resolved = Resolved {
+        color: Vec3::ZERO,
+        transmittance: 1.0,
+    };
 
     /// Eq. 6: composite over an opaque background, `color + background * transmittance`.
     #[inline]
@@ -79,7 +82,10 @@ pub fn resolve_rows(rows: &[Row]) -> Resolved {
         a += Vec3::new(unorm(r), unorm(g), unorm(b)) * v;
         v *= unorm(t);
     }
-    Resolved { color: a, transmittance: v }
+    Resolved {
+        color: a,
+        transmittance: v,
+    }
 }
 
 /// RGBA8 from a pixel: each channel clamped to `[0, 1]`, then `floor(x * 255 + 0.5)`
@@ -115,6 +121,9 @@ mod tests {
     #[test]
     fn writers_clamp_and_round() {
         assert_eq!(to_rgba8(Vec4::new(-1.0, 0.5, 2.0, f32::NAN)), [0, 128, 255, 0]);
-        assert_eq!(to_rgba16f(Vec4::new(0.0, 0.5, 4.0, 1.0)).map(f16::to_f32), [0.0, 0.5, 4.0, 1.0]);
+        assert_eq!(
+            to_rgba16f(Vec4::new(0.0, 0.5, 4.0, 1.0)).map(f16::to_f32),
+            [0.0, 0.5, 4.0, 1.0]
+        );
     }
 }

@@ -1,4 +1,4 @@
-//! 8. Every bad-input class returns its error; framebuffers refuse bad sizes and
+//! Property 8: every bad-input class returns its error; framebuffers refuse bad sizes and
 //! coordinates and change nothing when they do.
 
 use mlab::glam::{Vec3, Vec4};
@@ -8,7 +8,10 @@ use mlab::{Background, Fragment, FragmentError as E, FramebufferError, HybridFra
 fn every_bad_fragment_class_is_rejected() {
     let ok = Vec3::splat(0.5);
     let cases: &[(Result<Fragment, E>, E)] = &[
-        (Fragment::premultiplied(Vec3::new(f32::NAN, 0.0, 0.0), 0.5, 1.0), E::NanColor),
+        (
+            Fragment::premultiplied(Vec3::new(f32::NAN, 0.0, 0.0), 0.5, 1.0),
+            E::NanColor,
+        ),
         (Fragment::premultiplied(ok, f32::NAN, 1.0), E::NanAlpha),
         (Fragment::premultiplied(ok, 0.5, f32::NAN), E::NanDepth),
         (Fragment::premultiplied(ok, 0.5, f32::INFINITY), E::InfiniteDepth),
@@ -16,17 +19,35 @@ fn every_bad_fragment_class_is_rejected() {
         (Fragment::premultiplied(ok, -0.01, 1.0), E::AlphaOutOfRange),
         (Fragment::premultiplied(ok, 1.01, 1.0), E::AlphaOutOfRange),
         (Fragment::premultiplied(ok, f32::INFINITY, 1.0), E::AlphaOutOfRange),
-        (Fragment::premultiplied(Vec3::new(0.0, -0.1, 0.0), 0.5, 1.0), E::NegativeColor),
-        (Fragment::premultiplied(Vec3::new(0.0, 0.0, f32::INFINITY), 0.5, 1.0), E::InfiniteColor),
-        (Fragment::premultiplied(Vec3::new(1.5, 0.0, 0.0), 1.0, 1.0), E::ColorAboveOne),
+        (
+            Fragment::premultiplied(Vec3::new(0.0, -0.1, 0.0), 0.5, 1.0),
+            E::NegativeColor,
+        ),
+        (
+            Fragment::premultiplied(Vec3::new(0.0, 0.0, f32::INFINITY), 0.5, 1.0),
+            E::InfiniteColor,
+        ),
+        (
+            Fragment::premultiplied(Vec3::new(1.5, 0.0, 0.0), 1.0, 1.0),
+            E::ColorAboveOne,
+        ),
         (Fragment::straight(Vec3::new(3.0, 0.0, 0.0), 0.5, 1.0), E::ColorAboveOne),
-        (Fragment::straight(Vec3::new(-1.0, 0.0, 0.0), 0.5, 1.0), E::NegativeColor),
+        (
+            Fragment::straight(Vec3::new(-1.0, 0.0, 0.0), 0.5, 1.0),
+            E::NegativeColor,
+        ),
         (Fragment::with_transmittance(ok, 1.5, 1.0), E::AlphaOutOfRange),
         (Fragment::with_transmittance(ok, f32::NAN, 1.0), E::NanAlpha),
         (Fragment::additive(Vec3::new(2.0, 0.0, 0.0), 1.0), E::ColorAboveOne),
-        (Fragment::from_premultiplied_rgba(Vec4::new(0.1, 0.1, 0.1, 2.0), 1.0), E::AlphaOutOfRange),
+        (
+            Fragment::from_premultiplied_rgba(Vec4::new(0.1, 0.1, 0.1, 2.0), 1.0),
+            E::AlphaOutOfRange,
+        ),
         // NaN is reported before any other class.
-        (Fragment::premultiplied(Vec3::new(-1.0, 0.0, 0.0), 0.5, f32::NAN), E::NanDepth),
+        (
+            Fragment::premultiplied(Vec3::new(-1.0, 0.0, 0.0), 0.5, f32::NAN),
+            E::NanDepth,
+        ),
     ];
     for (i, (got, want)) in cases.iter().enumerate() {
         assert_eq!(got, &Err(*want), "case {i}");
@@ -41,7 +62,11 @@ fn valid_edge_fragments_are_accepted() {
     assert!(Fragment::premultiplied(Vec3::new(-0.0, 0.0, 1.0), 1.0, f32::from_bits(1)).is_ok());
     assert!(Fragment::straight(Vec3::splat(4.0), 0.25, -5.0).is_ok()); // HDR straight, premul = 1
     let f = Fragment::premultiplied(Vec3::splat(0.9), 0.1, -0.0).unwrap();
-    assert_eq!(f.row().depth().to_bits(), (-0.0f32).to_bits(), "depth stored bit for bit");
+    assert_eq!(
+        f.row().depth().to_bits(),
+        (-0.0f32).to_bits(),
+        "depth stored bit for bit"
+    );
 }
 
 #[test]
@@ -49,18 +74,35 @@ fn framebuffer_rejects_bad_storage_and_coordinates() {
     let mut s = vec![Row::EMPTY; 3 * 2 * 4 - 1];
     assert_eq!(
         MlabFramebuffer::<4>::new(&mut s, 3, 2).unwrap_err(),
-        FramebufferError::StorageLength { expected: 24, actual: 23 }
+        FramebufferError::StorageLength {
+            expected: 24,
+            actual: 23
+        }
     );
-    assert_eq!(MlabFramebuffer::<4>::new(&mut s, u32::MAX, u32::MAX).unwrap_err(), FramebufferError::SizeOverflow);
+    assert_eq!(
+        MlabFramebuffer::<4>::new(&mut s, u32::MAX, u32::MAX).unwrap_err(),
+        FramebufferError::SizeOverflow
+    );
     assert_eq!(
         HybridFramebuffer::<3>::new(&mut s, 3, 2).unwrap_err(),
-        FramebufferError::StorageLength { expected: 24, actual: 23 }
+        FramebufferError::StorageLength {
+            expected: 24,
+            actual: 23
+        }
     );
     let mut s = vec![Row::EMPTY; 24];
     let mut fb = MlabFramebuffer::<4>::new(&mut s, 3, 2).unwrap();
     let f = Fragment::straight(Vec3::ONE, 0.5, 1.0).unwrap();
     for (x, y) in [(3, 0), (0, 2), (u32::MAX, u32::MAX)] {
-        assert_eq!(fb.insert(x, y, &f), Err(FramebufferError::OutOfBounds { x, y, width: 3, height: 2 }));
+        assert_eq!(
+            fb.insert(x, y, &f),
+            Err(FramebufferError::OutOfBounds {
+                x,
+                y,
+                width: 3,
+                height: 2
+            })
+        );
         assert!(fb.pixel(x, y).is_err());
         assert!(fb.resolve(x, y).is_err());
     }
@@ -87,7 +129,10 @@ fn framebuffers_insert_resolve_and_expose_bytes() {
     assert_eq!(fb.pixel(1, 0).unwrap()[0], f.row());
     assert_eq!(fb.as_bytes().len(), 64);
     assert_eq!(&fb.as_bytes()[16..24], &f.row().to_bytes());
-    assert_eq!(fb.as_words()[4], u32::from_le_bytes(f.row().to_bytes()[..4].try_into().unwrap()));
+    assert_eq!(
+        fb.as_words()[4],
+        u32::from_le_bytes(f.row().to_bytes()[..4].try_into().unwrap())
+    );
     let mut out = vec![Vec4::ZERO; 4];
     fb.resolve_into(&mut out, Background::Transparent).unwrap();
     assert_eq!(out[1], Vec4::new(0.0, 128.0 / 255.0, 0.0, 1.0 - 127.0 / 255.0));
@@ -103,7 +148,10 @@ fn framebuffers_insert_resolve_and_expose_bytes() {
     hb.insert(0, 1, &f).unwrap();
     let (head, tail) = hb.pixel(0, 1).unwrap();
     assert_eq!(head, [f.row()]);
-    assert_eq!((tail.count(), tail.alpha_sum(), tail.color_sum()), (1, 128, [0, 128, 0]));
+    assert_eq!(
+        (tail.count(), tail.alpha_sum(), tail.color_sum()),
+        (1, 128, [0, 128, 0])
+    );
     // The tail lives in the pixel's last row-sized slot.
     assert_eq!(&hb.as_bytes()[(2 * 2 + 1) * 8..(2 * 2 + 2) * 8], &tail.to_bytes());
 }

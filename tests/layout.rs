@@ -8,7 +8,10 @@ fn row_layout_is_pinned() {
     assert_eq!(core::mem::align_of::<Row>(), 8);
     let row = Row::new([0x11, 0x22, 0x33], 0x44, f32::from_bits(0x8877_6655));
     assert_eq!(row.to_bytes(), [0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88]);
-    assert_eq!(bytemuck::bytes_of(&row), &[0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88]);
+    assert_eq!(
+        bytemuck::bytes_of(&row),
+        &[0x11, 0x22, 0x33, 0x44, 0x55, 0x66, 0x77, 0x88]
+    );
     assert_eq!(row.words(), [0x4433_2211, 0x8877_6655]);
     assert_eq!(Row::from_words([0x4433_2211, 0x8877_6655]), row);
     assert_eq!(Row::from_bytes(row.to_bytes()), row);
@@ -31,7 +34,10 @@ fn tail_layout_is_pinned() {
     assert_eq!(Tail::EMPTY.to_bytes(), [0; 8]);
     assert_eq!(Tail::from_bytes(t.to_bytes()), t);
     // Fields saturate at construction.
-    assert_eq!(Tail::from_sums([5000, 0, 0], 1 << 20, 1 << 20).words(), [1023, 0xffff_ffff]);
+    assert_eq!(
+        Tail::from_sums([5000, 0, 0], 1 << 20, 1 << 20).words(),
+        [1023, 0xffff_ffff]
+    );
 }
 
 #[test]

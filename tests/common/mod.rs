@@ -103,7 +103,7 @@ pub fn check_invariants(rows: &[Row], normal: bool) -> Result<(), String> {
         } else if seen_empty {
             return Err(format!("row {i} is not empty but follows an empty row: {rows:?}"));
         }
-        if i > 0 && !(rows[i - 1].depth() <= z) {
+        if i > 0 && rows[i - 1].depth() > z {
             return Err(format!("rows {} and {i} are out of order: {rows:?}", i - 1));
         }
         if normal {
