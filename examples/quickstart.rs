@@ -10,10 +10,10 @@ use mlab::{BlendingArray, Fragment, FragmentError, Hybrid};
 fn main() -> Result<(), FragmentError> {
     // (straight color, alpha, depth), in submission order (not sorted).
     let stream = [
-        (Vec3::new(1.0, 0.2, 0.2), 0.5, 3.0),  // red, far
-        (Vec3::new(0.2, 1.0, 0.2), 0.4, 1.0),  // green, near
-        (Vec3::new(0.2, 0.2, 1.0), 0.6, 2.0),  // blue, between: MLAB's merge error case
-        (Vec3::new(1.0, 1.0, 0.0), 0.0, 1.5),  // invisible (alpha 0, straight color -> 0)
+        (Vec3::new(1.0, 0.2, 0.2), 0.5, 3.0), // red, far
+        (Vec3::new(0.2, 1.0, 0.2), 0.4, 1.0), // green, near
+        (Vec3::new(0.2, 0.2, 1.0), 0.6, 2.0), // blue, between: MLAB's merge error case
+        (Vec3::new(1.0, 1.0, 0.0), 0.0, 1.5), // invisible (alpha 0, straight color -> 0)
         (Vec3::new(0.9, 0.9, 0.9), 0.3, 0.5), // white haze, nearest
     ];
     let background = Vec3::new(0.1, 0.1, 0.1);
@@ -40,8 +40,21 @@ fn main() -> Result<(), FragmentError> {
     let m = mlab.resolve().over(background);
     let h = ht.resolve().over(background);
     println!("exact      {:.4} {:.4} {:.4}", exact.x, exact.y, exact.z);
-    println!("MLAB M=2   {:.4} {:.4} {:.4}  (16 bytes: {:?})", m.x, m.y, m.z, mlab.rows());
-    println!("HT   K=1   {:.4} {:.4} {:.4}  (16 bytes: {:?}, {:?})", h.x, h.y, h.z, ht.head(), ht.tail());
+    println!(
+        "MLAB M=2   {:.4} {:.4} {:.4}  (16 bytes: {:?})",
+        m.x,
+        m.y,
+        m.z,
+        mlab.rows()
+    );
+    println!(
+        "HT   K=1   {:.4} {:.4} {:.4}  (16 bytes: {:?}, {:?})",
+        h.x,
+        h.y,
+        h.z,
+        ht.head(),
+        ht.tail()
+    );
     println!(
         "max error  MLAB {:.4}, HT {:.4}",
         (m - exact).abs().max_element(),
