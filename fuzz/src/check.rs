@@ -1,0 +1,121 @@
+//! Checks shared by the targets. Each one panics (a libFuzzer crash) with a message that
+//! names the broken property.
+
+use mlab::{Fragment, FragmentError, Resolved, Row};
+
+use crate::input::{Ctor, RawFragment};
+use crate::reference::defects;
+
+/// Build the fragment with the kernel and check it against the defect model:
+/// `Ok` exactly when the arguments have no defect, otherwise one of their defects, with
+/// NaN reported first as documented; a valid fragment holds the given values bit for
+/// bit and quantizes within half a step. Returns the fragment when valid.
+pub fn validate(raw: &RawFragment) -> Option<Fragment> {
+    let got = raw.build();
+    let (d, exp) = defects(raw);
+    match got {
+        Err(e) => {
+            assert!(!d.is_empty(), "{raw:?}: rejected with {e:?} but has no defect");
+            assert!(d.contains(e), "{raw:?}: rejected with {e:?}, which it does not have ({d:?})");
+            check_nan_first(raw, e);
+            None
+        }
+        Ok(f) => {
+            assert!(d.is_empty(), "{raw:?}: accepted as {f:?} but has defects {d:?}");
+            let c = f.color().to_array();
+            assert_eq!(c.map(f32::to_bits), exp.color.map(f32::to_bits), "{raw:?}: premultiplied color changed");
+            assert_eq!(f.alpha().to_bits(), exp.alpha.to_bits(), "{raw:?}: alpha changed");
+            assert_eq!(f.depth().to_bits(), raw.z.to_bits(), "{raw:?}: depth changed");
+            check_quantization(&f);
+            Some(f)
+        }
+    }
+}
+
+/// The documented order: NaN anywhere first (depth, then alpha, then color).
+/// `with_transmittance` checks its transmittance argument before anything else.
+fn check_nan_first(raw: &RawFragment, e: FragmentError) {
+    if raw.ctor == Ctor::WithTransmittance {
+        if raw.a.is_nan() {
+            assert_eq!(e, FragmentError::NanAlpha, "{raw:?}");
+            return;
+        }
+        if !(0.0..=1.0).contains(&raw.a) {
+            assert_eq!(e, FragmentError::AlphaOutOfRange, "{raw:?}");
+            return;
+        }
+    }
+    let first_nan = if raw.z.is_nan() {
+        Some(FragmentError::NanDepth)
+    } else if raw.a.is_nan() {
+        Some(FragmentError::NanAlpha)
+    } else if raw.color.iter().any(|c| c.is_nan()) {
+        Some(FragmentError::NanColor)
+    } else {
+        None
+    };
+    if let Some(nan) = first_nan {
+        assert_eq!(e, nan, "{raw:?}: NaN must be reported first");
+    }
+}
+
+/// The row of a valid fragment: each byte within half a step (plus f32 rounding) of the
+/// exact value, depth bit for bit, and color bytes not above `255 - T` when the
+/// premultiplied color does not exceed alpha.
+pub fn check_quantization(f: &Fragment) {
+    let row = f.row();
+    let c = f.color().to_array();
+    for (byte, v) in row.color().into_iter().zip(c) {
+        let err = (f64::from(byte) - f64::from(v) * 255.0).abs();
+        assert!(err <= 0.5 + 1e-4, "{f:?} -> {row:?}: color byte off by {err} steps");
+    }
+    let opacity = 255 - row.transmittance();
+    let err = (f64::from(opacity) - f64::from(f.alpha()) * 255.0).abs();
+    assert!(err <= 0.5 + 1e-4, "{f:?} -> {row:?}: alpha byte off by {err} steps");
+    assert_eq!(row.depth().to_bits(), f.depth().to_bits());
+    assert!(!row.is_empty(), "{f:?}: a valid fragment became the empty row");
+    if c.iter().all(|&v| v <= f.alpha()) {
+        assert!(row.color().iter().all(|&b| b <= opacity), "{f:?} -> {row:?}: color above alpha after quantization");
+    }
+}
+
+/// True if the rows satisfy the blending-array invariants (see [`check_invariants`]).
+pub fn invariants_hold(rows: &[Row]) -> bool {
+    let sorted = rows.windows(2).all(|w| w[0].depth() <= w[1].depth());
+    let no_nan = rows.iter().all(|r| !r.depth().is_nan());
+    let inf_are_empty = rows.iter().all(|r| r.depth() != f32::INFINITY || r.is_empty());
+    sorted && no_nan && inf_are_empty
+}
+
+/// Blending-array (and HT head) invariants: no NaN depth, depths non-decreasing front to
+/// back, rows at `z = +infinity` are exactly [`Row::EMPTY`] (hence only at the back).
+pub fn check_invariants(rows: &[Row], context: &dyn core::fmt::Debug) {
+    assert!(invariants_hold(rows), "invariants broken: {rows:?} after {context:?}");
+}
+
+/// A resolved pixel: finite, transmittance in `[0, 1]`, color channels in `[0, max_color]`.
+pub fn check_resolved(r: Resolved, max_color: f32, context: &dyn core::fmt::Debug) {
+    let t = r.transmittance;
+    assert!((0.0..=1.0).contains(&t), "transmittance {t} out of [0, 1]: {r:?} from {context:?}");
+    for c in r.color.to_array() {
+        assert!((0.0..=max_color).contains(&c), "color {c} out of [0, {max_color}]: {r:?} from {context:?}");
+    }
+}
+
+/// `|got - want| <= bound` for color channels and transmittance.
+pub fn check_close(got: Resolved, want: ([f64; 3], f64), bound: f64, context: &dyn core::fmt::Debug) {
+    let g = got.color.to_array();
+    for i in 0..3 {
+        let err = (f64::from(g[i]) - want.0[i]).abs();
+        assert!(err <= bound, "channel {i}: {got:?} vs exact {want:?}, error {err} > {bound}, from {context:?}");
+    }
+    let err = (f64::from(got.transmittance) - want.1).abs();
+    assert!(err <= bound, "transmittance: {got:?} vs exact {want:?}, error {err} > {bound}, from {context:?}");
+}
+
+/// True if no two depths compare equal (`-0.0 == 0.0` counts as equal).
+pub fn distinct_depths(rows: &[Row]) -> bool {
+    let mut z: Vec<f32> = rows.iter().map(|r| r.depth()).collect();
+    z.sort_by(|a, b| a.partial_cmp(b).expect("finite depths"));
+    z.windows(2).all(|w| w[0] != w[1])
+}

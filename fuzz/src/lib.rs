@@ -1,0 +1,20 @@
+//! Shared pieces of the `mlab` fuzz targets (issue 5): an input decoder, independent
+//! reference models, and the checks. Each target in `fuzz_targets/` is one line that calls
+//! a function of [`targets`], so the checks can also be replayed from a plain test.
+//!
+//! Every target checks a differential or an invariant, never only "no crash":
+//!
+//! | target | checks |
+//! |---|---|
+//! | `mlab_stream` | fragment validation against an independent defect model; after every insert: invariants, byte equality with a reference Listing 1 ([`reference::RefMlab`]), background visibility within `n/255` of the exact product; at the end, when the stream fits, the f64 oracle within `n/255` |
+//! | `hybrid_stream` | the same validation; head and tail byte-equal to a sort-and-sum reference after every insert; bytes identical for a shuffled and a reversed stream (distinct depths); f64 oracle when the stream fits |
+//! | `rows_from_bytes` | arbitrary rows and tails: layout round trips, resolve finite and in range and equal to an f64 composite, insert equal to a transcription of Listing 1 with an independent merge, tail saturation, invariants kept when they held before |
+//! | `lanes_masks` | framebuffer spans with masks at the buffer edges: pixels that are off (or outside) never change, guard rows never change, errors change nothing, resolve equals the per-pixel resolve |
+//!
+//! Lanes: the SIMD lane kernels do not exist yet. Each place where a lanes differential
+//! goes is marked `LANES:`; it is one more call whose bytes must equal the scalar bytes.
+
+pub mod check;
+pub mod input;
+pub mod reference;
+pub mod targets;

@@ -1,0 +1,588 @@
+//! The four fuzz targets. Each takes the raw fuzzer bytes; the first byte chooses the
+//! const parameters (rows per pixel), the rest is decoded by [`Input`].
+
+use mlab::glam::{Vec3, Vec4};
+use mlab::half::f16;
+use mlab::{
+    Background, BlendingArray, Fragment, FramebufferError, Hybrid, HybridFramebuffer, MlabFramebuffer, Resolved, Row,
+    Tail, hybrid, mlab as mlab_mod, resolve_rows, to_rgba8, to_rgba16f,
+};
+
+use crate::check::{check_close, check_invariants, check_resolved, distinct_depths, invariants_hold, validate};
+use crate::input::Input;
+use crate::reference::{
+    RefMlab, composite_rows_f64, oracle, ref_bubble, ref_hybrid, ref_merge, ref_tail_bytes, ref_tail_fields, tail_f64,
+};
+
+/// Most fragments per stream (longer inputs are cut).
+pub const MAX_FRAGMENTS: usize = 64;
+
+/// Largest color of a resolved HT tail: `1023 / 255` (the 10-bit sums).
+pub const TAIL_COLOR_MAX: f32 = 1023.0 / 255.0;
+
+/// `(premultiplied color, alpha, depth)` of an accepted fragment, for the oracle.
+fn parts(f: &Fragment) -> ([f32; 3], f32, f32) {
+    (f.color().to_array(), f.alpha(), f.depth())
+}
+
+/// Premultiplied color not above alpha: the condition of the oracle bound.
+fn occluding(frags: &[([f32; 3], f32, f32)]) -> bool {
+    frags.iter().all(|(c, a, _)| c.iter().all(|v| v <= a))
+}
+
+// ---------------------------------------------------------------------------------------
+// mlab_stream
+
+/// `mlab_stream`: M from the first byte (1, 2, 3, 4 or 8), then a stream of fragments.
+pub fn mlab_stream(data: &[u8]) {
+    let mut input = Input::new(data);
+    let Some(sel) = input.u8() else { return };
+    match sel % 5 {
+        0 => mlab_stream_m::<1>(&mut input),
+        1 => mlab_stream_m::<2>(&mut input),
+        2 => mlab_stream_m::<3>(&mut input),
+        3 => mlab_stream_m::<4>(&mut input),
+        _ => mlab_stream_m::<8>(&mut input),
+    }
+}
+
+fn mlab_stream_m<const M: usize>(input: &mut Input) {
+    let mut array = BlendingArray::<M>::new();
+    let mut reference = RefMlab::new(M);
+    let mut accepted = Vec::new();
+    // Exact background visibility: the product of (1 - alpha).
+    let mut visibility = 1.0f64;
+    while accepted.len() < MAX_FRAGMENTS {
+        let Some(raw) = input.raw_fragment() else { break };
+        let Some(f) = validate(&raw) else { continue };
+        array.insert(&f);
+        // LANES: insert the same row into a lanes blending array that held the same rows
+        // before, and assert_eq! its bytes with `array.rows()`.
+        reference.insert(f.row());
+        accepted.push(parts(&f));
+        visibility *= 1.0 - f64::from(f.alpha());
+        let n = accepted.len();
+        let rows = array.rows();
+        assert_eq!(rows.as_slice(), reference.rows().as_slice(), "M = {M}: differs from reference Listing 1 after {accepted:?}");
+        check_invariants(rows, &accepted);
+        let filled = rows.iter().filter(|r| !r.is_empty()).count();
+        assert_eq!(filled, n.min(M), "M = {M}: {rows:?} after {n} fragments");
+        let r = array.resolve();
+        check_resolved(r, M as f32, &accepted);
+        // Each quantization and each merge moves the product by at most 0.5 / 255.
+        let err = (f64::from(r.transmittance) - visibility).abs();
+        assert!(err <= n as f64 / 255.0 + 1e-5, "M = {M}: visibility {r:?} vs exact {visibility} after {accepted:?}");
+    }
+    let n = accepted.len();
+    if n <= M && occluding(&accepted) {
+        check_close(array.resolve(), oracle(&accepted), n as f64 / 255.0 + 1e-5, &accepted);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// hybrid_stream
+
+/// `hybrid_stream`: K from the first byte (0, 1, 2, 4 or 8), then a stream of fragments,
+/// then the seed of a permutation.
+pub fn hybrid_stream(data: &[u8]) {
+    let mut input = Input::new(data);
+    let Some(sel) = input.u8() else { return };
+    match sel % 5 {
+        0 => hybrid_stream_k::<0>(&mut input),
+        1 => hybrid_stream_k::<1>(&mut input),
+        2 => hybrid_stream_k::<2>(&mut input),
+        3 => hybrid_stream_k::<4>(&mut input),
+        _ => hybrid_stream_k::<8>(&mut input),
+    }
+}
+
+fn hybrid_stream_k<const K: usize>(input: &mut Input) {
+    let mut ht = Hybrid::<K>::new();
+    let mut frags = Vec::new();
+    let mut rows = Vec::new();
+    // The stream ends at a fragment tag 0xff (so the permutation seed can follow) or at the end.
+    while frags.len() < MAX_FRAGMENTS {
+        let Some(raw) = input.raw_fragment() else { break };
+        if raw.ctor == crate::input::Ctor::PremultipliedRgba && raw.z.to_bits() == 0xffff_ffff {
+            break;
+        }
+        let Some(f) = validate(&raw) else { continue };
+        ht.insert(&f);
+        // LANES: the same insert in a lanes HT pixel; assert_eq! head rows and tail bytes.
+        frags.push(f);
+        rows.push(f.row());
+        let (head, tail) = ref_hybrid(K, &rows);
+        assert_eq!(ht.head().as_slice(), head.as_slice(), "K = {K}: head differs from the reference after {rows:?}");
+        assert_eq!(ht.tail().to_bytes(), tail, "K = {K}: tail {:?} differs from the reference after {rows:?}", ht.tail());
+        check_invariants(ht.head(), &rows);
+        check_resolved(ht.resolve(), K as f32 + TAIL_COLOR_MAX, &rows);
+    }
+    let n = frags.len();
+    let accepted: Vec<_> = frags.iter().map(parts).collect();
+    if n <= K {
+        assert_eq!(ht.tail(), Tail::EMPTY, "K = {K}: tail used with {n} fragments");
+        if occluding(&accepted) {
+            check_close(ht.resolve(), oracle(&accepted), n as f64 / 255.0 + 1e-5, &accepted);
+        }
+    }
+    if !distinct_depths(&rows) {
+        return;
+    }
+    // Order independence: a shuffled and a reversed stream give the same bytes and pixel.
+    let mut seed = input.u32().unwrap_or(0x9e37_79b9) | 1;
+    let mut order: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        seed ^= seed << 13;
+        seed ^= seed >> 17;
+        seed ^= seed << 5;
+        order.swap(i, seed as usize % (i + 1));
+    }
+    let reversed: Vec<usize> = (0..n).rev().collect();
+    for order in [order, reversed] {
+        let mut other = Hybrid::<K>::new();
+        for &i in &order {
+            other.insert(&frags[i]);
+        }
+        assert_eq!(other, ht, "K = {K}: HT depends on submission order {order:?} of {rows:?}");
+        let (a, b) = (other.resolve(), ht.resolve());
+        assert_eq!(a.transmittance.to_bits(), b.transmittance.to_bits());
+        assert_eq!(a.color.to_array().map(f32::to_bits), b.color.to_array().map(f32::to_bits));
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// rows_from_bytes
+
+/// Bytes of a row, or `fill` when the input is exhausted.
+fn row_or(input: &mut Input, fill: Row) -> Row {
+    input.array::<8>().map(Row::from_bytes).unwrap_or(fill)
+}
+
+/// Layout of any 8 bytes as a row and as a tail, checked against the documented tables.
+pub fn check_layout(b: [u8; 8]) {
+    let w = [u32::from_le_bytes([b[0], b[1], b[2], b[3]]), u32::from_le_bytes([b[4], b[5], b[6], b[7]])];
+    let row = Row::from_bytes(b);
+    assert_eq!(row.to_bytes(), b);
+    assert_eq!(row.words(), w);
+    assert_eq!(Row::from_words(w), row);
+    assert_eq!(row.color(), [b[0], b[1], b[2]]);
+    assert_eq!(row.transmittance(), b[3]);
+    assert_eq!(row.rgbt(), [b[0], b[1], b[2], b[3]]);
+    assert_eq!(row.depth().to_bits(), w[1]);
+    assert_eq!(row.is_empty(), b == [0, 0, 0, 255, 0, 0, 0x80, 0x7f]);
+    assert_eq!(row.is_invisible(), b[..4] == [0, 0, 0, 255]);
+    let tail = Tail::from_bytes(b);
+    assert_eq!(tail.to_bytes(), b);
+    assert_eq!(tail.words(), w);
+    assert_eq!(Tail::from_words(w), tail);
+    assert_eq!(tail.color_sum(), [w[0] & 1023, (w[0] >> 10) & 1023, (w[0] >> 20) & 1023]);
+    assert_eq!(tail.alpha_sum(), w[1] & 0xffff);
+    assert_eq!(tail.count(), w[1] >> 16);
+    assert_eq!(tail.spare(), w[0] >> 30);
+}
+
+fn tail_fields(t: Tail) -> [u64; 5] {
+    let [r, g, b] = t.color_sum();
+    [r, g, b, t.alpha_sum(), t.count()].map(u64::from)
+}
+
+/// `rows_from_bytes`: the first byte picks M (1, 2, 3, 4, 8) and K (0, 1, 2, 4, 8); then
+/// M rows, a row to insert, K head rows, a tail, a background (missing bytes: empty rows).
+pub fn rows_from_bytes(data: &[u8]) {
+    for chunk in data.chunks_exact(8) {
+        check_layout(chunk.try_into().unwrap());
+    }
+    let mut input = Input::new(data);
+    let Some(sel) = input.u8() else { return };
+    match sel % 5 {
+        0 => garbage_mlab::<1>(&mut input),
+        1 => garbage_mlab::<2>(&mut input),
+        2 => garbage_mlab::<3>(&mut input),
+        3 => garbage_mlab::<4>(&mut input),
+        _ => garbage_mlab::<8>(&mut input),
+    }
+    match sel / 5 % 5 {
+        0 => garbage_hybrid::<0>(&mut input),
+        1 => garbage_hybrid::<1>(&mut input),
+        2 => garbage_hybrid::<2>(&mut input),
+        3 => garbage_hybrid::<4>(&mut input),
+        _ => garbage_hybrid::<8>(&mut input),
+    }
+}
+
+fn garbage_mlab<const M: usize>(input: &mut Input) {
+    let rows: [Row; M] = core::array::from_fn(|_| row_or(input, Row::EMPTY));
+    let new = row_or(input, Row::EMPTY);
+    let context = (&rows, new);
+    assert_eq!(mlab_mod::merge(rows[0], new), ref_merge(rows[0], new), "merge of {context:?}");
+
+    // Resolve of any rows: finite, in range, and Eq. 5 evaluated in f64.
+    let r = resolve_rows(&rows);
+    check_resolved(r, M as f32, &context);
+    check_close(r, composite_rows_f64(&rows), 1e-5, &context);
+    check_pixels(r, input, &context);
+
+    // Insert of any row into any rows: Listing 1 step by step, never a panic.
+    let (mut expected, pushed) = ref_bubble(&rows, new);
+    let last = expected[M - 1];
+    expected[M - 1] = ref_merge(last, pushed);
+    let mut after = rows;
+    mlab_mod::insert(&mut after, new);
+    // LANES: the same insert on a lanes array holding `rows`; assert_eq! with `after`.
+    assert_eq!(after.as_slice(), expected.as_slice(), "insert {new:?} into {rows:?}");
+    // Rows that satisfied the invariants keep them for any row that is not NaN or a
+    // non-empty row at +infinity.
+    let new_ok = new.is_empty() || new.depth() < f32::INFINITY;
+    if invariants_hold(&rows) && new_ok {
+        check_invariants(&after, &context);
+    }
+    check_resolved(resolve_rows(&after), M as f32, &context);
+}
+
+fn garbage_hybrid<const K: usize>(input: &mut Input) {
+    let head: [Row; K] = core::array::from_fn(|_| row_or(input, Row::EMPTY));
+    let tail = Tail::from_bytes(input.array::<8>().unwrap_or([0; 8]));
+    let new = row_or(input, Row::EMPTY);
+    let context = (&head, tail, new);
+
+    // The tail alone: finite, in range, and Bavoil-Myers evaluated in f64.
+    let t = tail.resolve();
+    check_resolved(t, TAIL_COLOR_MAX, &tail);
+    let (c_ref, t_ref) = tail_f64(tail_fields(tail));
+    let c = t.color.to_array();
+    for i in 0..3 {
+        let err = (f64::from(c[i]) - c_ref[i]).abs();
+        assert!(err <= 1e-3 * c_ref[i].max(1.0), "tail color {i}: {t:?} vs {c_ref:?} from {tail:?}");
+    }
+    assert!((f64::from(t.transmittance) - t_ref).abs() <= 1e-3, "tail T: {t:?} vs {t_ref} from {tail:?}");
+
+    let r = hybrid::resolve(&head, tail);
+    check_resolved(r, K as f32 + TAIL_COLOR_MAX, &context);
+    check_pixels(r, input, &context);
+
+    // Listing 2 on any head and tail: the head is the bubble, the tail adds the pushed-out
+    // row field by field, saturating, unless it is invisible; spare bits are kept.
+    let (expected_head, pushed) = ref_bubble(&head, new);
+    let expected_tail = ref_tail_bytes(ref_tail_fields(tail_fields(tail), &[pushed]), tail.spare());
+    let (mut h, mut t) = (head, tail);
+    hybrid::insert(&mut h, &mut t, new);
+    // LANES: the same insert on a lanes HT pixel; assert_eq! head and tail bytes.
+    assert_eq!(h.as_slice(), expected_head.as_slice(), "HT insert {new:?} into {head:?}");
+    assert_eq!(t.to_bytes(), expected_tail, "HT tail after {new:?} into {tail:?}: {t:?}");
+    let new_ok = new.is_empty() || new.depth() < f32::INFINITY;
+    if invariants_hold(&head) && new_ok {
+        check_invariants(&h, &context);
+    }
+    check_resolved(hybrid::resolve(&h, t), K as f32 + TAIL_COLOR_MAX, &context);
+}
+
+/// The pixel writers on a resolved value and a background read from the input (any bits:
+/// backgrounds are not validated; NaN gives byte 0 and a NaN half).
+fn check_pixels(r: Resolved, input: &mut Input, context: &dyn core::fmt::Debug) {
+    let bg = Vec3::new(input.unit().unwrap_or(0.0), input.unit().unwrap_or(0.5), input.unit().unwrap_or(1.0));
+    for background in [Background::Opaque(bg), Background::Transparent] {
+        let p = r.pixel(background);
+        let bytes = to_rgba8(p);
+        let halves = to_rgba16f(p);
+        for i in 0..4 {
+            let x = p.to_array()[i];
+            let want = if x.is_nan() { 0 } else { (f64::from(x.clamp(0.0, 1.0)) * 255.0 + 0.5).floor() as u8 };
+            assert!(bytes[i].abs_diff(want) <= 1, "rgba8 of {p:?} = {bytes:?} from {context:?}");
+            assert_eq!(halves[i].to_bits(), f16::from_f32(x).to_bits());
+        }
+        if let Background::Transparent = background {
+            assert!((0.0..=1.0).contains(&p.w), "premultiplied alpha {p:?} from {context:?}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// lanes_masks
+
+/// A framebuffer kind, so one span checker serves MLAB and HT.
+pub trait Layout {
+    /// Row-sized slots per pixel.
+    const SLOTS: usize;
+    /// Largest resolved color.
+    const MAX_COLOR: f32;
+    /// The view type.
+    type View<'a>;
+    /// `new` of the view.
+    fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError>;
+    /// `insert` of the view.
+    fn insert(v: &mut Self::View<'_>, x: u32, y: u32, f: &Fragment) -> Result<(), FramebufferError>;
+    /// `clear` of the view.
+    fn clear(v: &mut Self::View<'_>);
+    /// `resolve` of one pixel.
+    fn resolve(v: &Self::View<'_>, x: u32, y: u32) -> Result<Resolved, FramebufferError>;
+    /// `resolve_into`, `resolve_rgba8` or `resolve_rgba16f`, by `which`, into f32 pixels.
+    fn resolve_all(v: &Self::View<'_>, which: u8, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError>;
+    /// `as_bytes` of the view.
+    fn bytes<'b>(v: &'b Self::View<'_>) -> &'b [u8];
+    /// The reference insert on one pixel's slots (any contents).
+    fn ref_insert(slots: &mut [Row], row: Row);
+    /// The resolve of one pixel's slots, split here.
+    fn ref_resolve(slots: &[Row]) -> Resolved;
+    /// A cleared pixel.
+    fn cleared(slots: &mut [Row]);
+}
+
+/// MLAB with `M` rows per pixel.
+pub struct MlabLayout<const M: usize>;
+/// HT with `K` head rows and a tail per pixel.
+pub struct HybridLayout<const K: usize>;
+
+/// Run one of the three resolve writers; bytes and halves are widened to f32 so that
+/// errors and untouched outputs compare the same way.
+macro_rules! resolve_all_impl {
+    ($v:expr, $which:expr, $out:expr, $bg:expr) => {{
+        let n = $out.len();
+        match $which % 3 {
+            0 => $v.resolve_into($out, $bg),
+            1 => {
+                let mut px: Vec<[u8; 4]> = $out.iter().map(|p| p.to_array().map(|x| x as u8)).collect();
+                let r = $v.resolve_rgba8(&mut px, $bg);
+                debug_assert_eq!(px.len(), n);
+                for (o, p) in $out.iter_mut().zip(px) {
+                    *o = Vec4::from_array(p.map(f32::from));
+                }
+                r
+            }
+            _ => {
+                let mut px: Vec<[f16; 4]> = $out.iter().map(|p| p.to_array().map(f16::from_f32)).collect();
+                let r = $v.resolve_rgba16f(&mut px, $bg);
+                for (o, p) in $out.iter_mut().zip(px) {
+                    *o = Vec4::from_array(p.map(f16::to_f32));
+                }
+                r
+            }
+        }
+    }};
+}
+
+impl<const M: usize> Layout for MlabLayout<M> {
+    const SLOTS: usize = M;
+    const MAX_COLOR: f32 = M as f32;
+    type View<'a> = MlabFramebuffer<'a, M>;
+    fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError> {
+        MlabFramebuffer::new(s, w, h)
+    }
+    fn insert(v: &mut Self::View<'_>, x: u32, y: u32, f: &Fragment) -> Result<(), FramebufferError> {
+        v.insert(x, y, f)
+    }
+    fn clear(v: &mut Self::View<'_>) {
+        v.clear()
+    }
+    fn resolve(v: &Self::View<'_>, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+        v.resolve(x, y)
+    }
+    fn resolve_all(v: &Self::View<'_>, which: u8, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
+        resolve_all_impl!(v, which, out, bg)
+    }
+    fn bytes<'b>(v: &'b Self::View<'_>) -> &'b [u8] {
+        v.as_bytes()
+    }
+    fn ref_insert(slots: &mut [Row], row: Row) {
+        let (mut rows, pushed) = ref_bubble(slots, row);
+        let last = rows[M - 1];
+        rows[M - 1] = ref_merge(last, pushed);
+        slots.copy_from_slice(&rows);
+    }
+    fn ref_resolve(slots: &[Row]) -> Resolved {
+        resolve_rows(slots)
+    }
+    fn cleared(slots: &mut [Row]) {
+        slots.fill(Row::EMPTY);
+    }
+}
+
+impl<const K: usize> Layout for HybridLayout<K> {
+    const SLOTS: usize = K + 1;
+    const MAX_COLOR: f32 = K as f32 + TAIL_COLOR_MAX;
+    type View<'a> = HybridFramebuffer<'a, K>;
+    fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError> {
+        HybridFramebuffer::new(s, w, h)
+    }
+    fn insert(v: &mut Self::View<'_>, x: u32, y: u32, f: &Fragment) -> Result<(), FramebufferError> {
+        v.insert(x, y, f)
+    }
+    fn clear(v: &mut Self::View<'_>) {
+        v.clear()
+    }
+    fn resolve(v: &Self::View<'_>, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+        v.resolve(x, y)
+    }
+    fn resolve_all(v: &Self::View<'_>, which: u8, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
+        resolve_all_impl!(v, which, out, bg)
+    }
+    fn bytes<'b>(v: &'b Self::View<'_>) -> &'b [u8] {
+        v.as_bytes()
+    }
+    fn ref_insert(slots: &mut [Row], row: Row) {
+        let tail = Tail::from_bytes(slots[K].to_bytes());
+        let (head, pushed) = ref_bubble(&slots[..K], row);
+        slots[..K].copy_from_slice(&head);
+        let t = ref_tail_bytes(ref_tail_fields(tail_fields(tail), &[pushed]), tail.spare());
+        slots[K] = Row::from_bytes(t);
+    }
+    fn ref_resolve(slots: &[Row]) -> Resolved {
+        hybrid::resolve(&slots[..K], Tail::from_bytes(slots[K].to_bytes()))
+    }
+    fn cleared(slots: &mut [Row]) {
+        slots[..K].fill(Row::EMPTY);
+        slots[K] = Row::from_bytes([0; 8]);
+    }
+}
+
+/// Guard rows on each side of the storage handed to the framebuffer.
+const GUARD: usize = 3;
+/// A guard row (a pattern no operation writes).
+const GUARD_ROW: Row = Row::new([0xde, 0xad, 0xbe], 0xef, -1234.5);
+
+/// `lanes_masks`: the first byte picks the kind (MLAB with M = 1, 2, 4 or HT with
+/// K = 0, 1, 3), then width, height, storage length, contents, and a list of operations.
+///
+/// Today this drives the scalar framebuffer, one pixel per lane of a span: spans of up to
+/// 8 pixels with an 8-bit mask, starting anywhere (also past the right and bottom edges).
+/// Pixels that are off, or outside the buffer, never change; guard rows never change;
+/// an error changes nothing.
+///
+/// LANES: when the lane kernels land, each span also runs through the lanes entry point
+/// (mask = the span mask, partial spans at the right edge) on a copy of the storage, and
+/// the copy must equal the scalar storage byte for byte.
+pub fn lanes_masks(data: &[u8]) {
+    let mut input = Input::new(data);
+    let Some(sel) = input.u8() else { return };
+    match sel % 6 {
+        0 => spans::<MlabLayout<1>>(&mut input),
+        1 => spans::<MlabLayout<2>>(&mut input),
+        2 => spans::<MlabLayout<4>>(&mut input),
+        3 => spans::<HybridLayout<0>>(&mut input),
+        4 => spans::<HybridLayout<1>>(&mut input),
+        _ => spans::<HybridLayout<3>>(&mut input),
+    }
+}
+
+fn spans<L: Layout>(input: &mut Input) {
+    let (Some(w), Some(h), Some(len_sel), Some(fill)) = (input.u8(), input.u8(), input.u8(), input.u8()) else {
+        return;
+    };
+    let (w, h) = (u32::from(w % 12) + 1, u32::from(h % 5) + 1);
+    let needed = w as usize * h as usize * L::SLOTS;
+    // Mostly the right length; sometimes one row short or long, or none at all.
+    let len = match len_sel % 16 {
+        13 => needed.saturating_sub(1),
+        14 => needed + 1,
+        15 => 0,
+        _ => needed,
+    };
+    let mut buf = vec![GUARD_ROW; len + 2 * GUARD];
+    for (i, slot) in buf[GUARD..GUARD + len].iter_mut().enumerate() {
+        // Empty storage, or storage read back from arbitrary bytes (fill pattern + input).
+        *slot = if fill & 1 == 0 {
+            Row::EMPTY
+        } else {
+            input.array::<8>().map(Row::from_bytes).unwrap_or(Row::new([fill, i as u8, 0], fill, i as f32))
+        };
+    }
+    let snapshot = buf.clone();
+    match L::view(&mut buf[GUARD..GUARD + len], w, h).map(|v| L::bytes(&v).to_vec()) {
+        Err(e) => {
+            assert_ne!(len, needed, "{w}x{h}: storage of the right length refused: {e:?}");
+            assert_eq!(e, FramebufferError::StorageLength { expected: needed, actual: len });
+            assert_eq!(buf, snapshot, "a refused view changed the storage");
+            return;
+        }
+        Ok(view_bytes) => {
+            assert_eq!(len, needed, "{w}x{h}: storage of {len} rows accepted, {needed} needed");
+            let bytes: Vec<u8> = buf[GUARD..GUARD + len].iter().flat_map(|r| r.to_bytes()).collect();
+            assert_eq!(view_bytes, bytes, "as_bytes is not the rows' bytes");
+        }
+    }
+    let pixel = |x: u32, y: u32| GUARD + (y as usize * w as usize + x as usize) * L::SLOTS;
+    for _ in 0..32 {
+        let Some(op) = input.u8() else { break };
+        let before = buf.clone();
+        let mut expected = buf.clone();
+        let mut v = L::view(&mut buf[GUARD..GUARD + len], w, h).expect("accepted above");
+        match op % 4 {
+            // A span: pixels x0 .. x0 + n on line y, lane i on if bit i of the mask.
+            0 | 1 => {
+                let (Some(x0), Some(y), Some(n), Some(mask)) = (input.u8(), input.u8(), input.u8(), input.u8()) else {
+                    break;
+                };
+                let Some(raw) = input.raw_fragment() else { break };
+                let Some(f) = validate(&raw) else { continue };
+                let (x0, y, n) = (u32::from(x0) % (w + 4), u32::from(y) % (h + 2), u32::from(n % 9));
+                for lane in 0..n {
+                    let x = x0 + lane;
+                    if mask >> lane & 1 == 0 {
+                        continue;
+                    }
+                    let got = L::insert(&mut v, x, y, &f);
+                    if x < w && y < h {
+                        assert_eq!(got, Ok(()));
+                        let p = pixel(x, y);
+                        L::ref_insert(&mut expected[p..p + L::SLOTS], f.row());
+                    } else {
+                        assert_eq!(got, Err(FramebufferError::OutOfBounds { x, y, width: w, height: h }));
+                    }
+                }
+                // LANES: run the same span (x0, y, n, mask) through the lanes kernel on a copy
+                // of `before` and assert_eq! it with `buf` after this match.
+            }
+            // Resolve every pixel into an output of the right length, or one off.
+            2 => {
+                let (Some(which), Some(off), Some(b)) = (input.u8(), input.u8(), input.u8()) else { break };
+                let pixels = (w * h) as usize;
+                let n = match off % 8 {
+                    6 => pixels - 1,
+                    7 => pixels + 1,
+                    _ => pixels,
+                };
+                let bg = if b == 255 { Background::Transparent } else { Background::Opaque(Vec3::splat(f32::from(b) / 254.0)) };
+                let sentinel = Vec4::new(7.0, 7.0, 7.0, 7.0);
+                let mut out = vec![sentinel; n];
+                let got = L::resolve_all(&v, which, &mut out, bg);
+                if n != pixels {
+                    assert_eq!(got, Err(FramebufferError::OutputLength { expected: pixels, actual: n }));
+                    assert!(out.iter().all(|&p| p == sentinel), "a refused resolve wrote its output");
+                } else {
+                    assert_eq!(got, Ok(()));
+                    for y in 0..h {
+                        for x in 0..w {
+                            let p = pixel(x, y);
+                            let r = L::ref_resolve(&before[p..p + L::SLOTS]);
+                            assert_eq!(L::resolve(&v, x, y), Ok(r));
+                            check_resolved(r, L::MAX_COLOR, &(x, y));
+                            let want = r.pixel(bg);
+                            let got = out[(y * w + x) as usize];
+                            let want = match which % 3 {
+                                0 => want,
+                                1 => Vec4::from_array(to_rgba8(want).map(f32::from)),
+                                _ => Vec4::from_array(to_rgba16f(want).map(f16::to_f32)),
+                            };
+                            assert_eq!(got, want, "pixel ({x}, {y})");
+                        }
+                    }
+                }
+                let (Some(x), Some(y)) = (input.u8(), input.u8()) else { break };
+                let (x, y) = (u32::from(x), u32::from(y) % (h + 2));
+                if x >= w || y >= h {
+                    assert_eq!(L::resolve(&v, x, y), Err(FramebufferError::OutOfBounds { x, y, width: w, height: h }));
+                }
+            }
+            _ => {
+                L::clear(&mut v);
+                for p in 0..(w * h) as usize {
+                    let p = GUARD + p * L::SLOTS;
+                    L::cleared(&mut expected[p..p + L::SLOTS]);
+                }
+            }
+        }
+        drop(v);
+        assert_eq!(buf[..GUARD], before[..GUARD], "guard rows before the storage changed");
+        assert_eq!(buf[GUARD + len..], before[GUARD + len..], "guard rows after the storage changed");
+        assert_eq!(buf, expected, "{w}x{h}: pixels differ from the per-pixel reference after op {op}");
+    }
+}
