@@ -1,4 +1,404 @@
-//! oit-lab: placeholder until the lab issue lands.
-fn main() {
-    println!("oit-lab: not yet implemented");
+//! oit-lab: the command line. See `oit-lab --help`.
+
+use indicatif::{ProgressBar, ProgressStyle};
+use oit_lab::dump;
+use oit_lab::methods::{Frame, HT_SIZES, MLAB_SIZES, Method};
+use oit_lab::metrics::compare;
+use oit_lab::picture::{Picture, figure};
+use oit_lab::report::{Evaluation, evaluate, full_table, summary_table};
+use oit_lab::scenes::Scene;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+const HELP: &str = "\
+oit-lab: compare order-independent transparency methods with the exact A-buffer
+
+USAGE:
+    oit-lab [run] [OPTIONS]                 render every scene with every method (the main job)
+    oit-lab evaluate --fragments FILE [OPTIONS]
+                                            the same comparison on a fragment dump
+    oit-lab dump --scene NAME --output FILE [OPTIONS]
+                                            write a scene's fragment stream as a dump
+    oit-lab help | --help | -h              this text; `oit-lab COMMAND --help` for a command
+
+The main job writes OUT/figure.png (Figure 3 grid), OUT/figure-small.png, one PNG per image
+and difference image under OUT/SCENE/, and prints the Markdown tables. OUT is ./out.
+";
+
+const RUN_HELP: &str = "\
+oit-lab run: render every scene with every method and compare with the A-buffer
+
+USAGE:
+    oit-lab [run] [OPTIONS]
+
+OPTIONS:
+    --size WxH        frame size (default 640x360)
+    --hd              same as --size 1280x720 (millions of fragments per scene)
+    --seed N          scene seed (default 1)
+    --scenes A,B,...  only these scenes (HAIR, PARTICLES, FOREST, TEAPOTS or PWRPLANT, GLASS)
+    --out DIR         output folder (default out, relative to the current folder)
+    --no-flip         skip the FLIP metric
+    --no-png          write no PNG files
+    -h, --help        this text
+";
+
+const EVAL_HELP: &str = "\
+oit-lab evaluate: compare every method with the A-buffer on a fragment dump
+
+USAGE:
+    oit-lab evaluate --fragments FILE [OPTIONS]
+
+OPTIONS:
+    --fragments FILE  the dump (format: lab/src/dump.rs, docs/quality.md)
+    --psnr DB         report the smallest MLAB M and HT K reaching this PSNR (default 40)
+    --flip X          ... and a mean FLIP at or below X (default: PSNR only)
+    --out DIR         write the images there (default: none)
+    --no-flip         skip the FLIP metric
+    -h, --help        this text
+
+Dump format (little endian): magic OITFRAG1, u32 width, u32 height, 3 x f32 background,
+u64 count, then per fragment u32 x, u32 y, f32 depth, 3 x f32 premultiplied color, f32 alpha.
+";
+
+const DUMP_HELP: &str = "\
+oit-lab dump: write a scene's fragment stream as a dump file
+
+USAGE:
+    oit-lab dump --scene NAME --output FILE [--size WxH] [--seed N]
+
+OPTIONS:
+    --scene NAME      HAIR, PARTICLES, FOREST, TEAPOTS (or PWRPLANT), GLASS
+    --output FILE     where to write
+    --size WxH        frame size (default 640x360)
+    --seed N          scene seed (default 1)
+    -h, --help        this text
+";
+
+/// A command line error: the message, and whether to show usage (exit code 2) or not (1).
+struct Fail(String, bool);
+
+fn usage(m: impl Into<String>) -> Fail {
+    Fail(m.into(), true)
+}
+
+fn runtime(m: impl Into<String>) -> Fail {
+    Fail(m.into(), false)
+}
+
+struct Args {
+    rest: Vec<String>,
+}
+
+impl Args {
+    fn flag(&mut self, names: &[&str]) -> bool {
+        let before = self.rest.len();
+        self.rest.retain(|a| !names.contains(&a.as_str()));
+        self.rest.len() != before
+    }
+
+    fn value(&mut self, name: &str) -> Result<Option<String>, Fail> {
+        let Some(i) = self.rest.iter().position(|a| a == name) else {
+            return Ok(None);
+        };
+        if i + 1 >= self.rest.len() {
+            return Err(usage(format!("{name} needs a value")));
+        }
+        let v = self.rest.remove(i + 1);
+        self.rest.remove(i);
+        Ok(Some(v))
+    }
+
+    fn finish(self) -> Result<(), Fail> {
+        match self.rest.first() {
+            Some(a) => Err(usage(format!("unexpected argument '{a}'"))),
+            None => Ok(()),
+        }
+    }
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), Fail> {
+    let bad = || usage(format!("--size: '{s}' is not WIDTHxHEIGHT within 8x8..=8192x8192"));
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h): (u32, u32) = (w.parse().map_err(|_| bad())?, h.parse().map_err(|_| bad())?);
+    if !(8..=8192).contains(&w) || !(8..=8192).contains(&h) {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn parse_seed(a: &mut Args) -> Result<u64, Fail> {
+    match a.value("--seed")? {
+        Some(s) => s
+            .parse()
+            .map_err(|_| usage(format!("--seed: '{s}' is not a non-negative integer"))),
+        None => Ok(1),
+    }
+}
+
+fn main() -> ExitCode {
+    let mut rest: Vec<String> = std::env::args().skip(1).collect();
+    let cmd = match rest.first().map(String::as_str) {
+        Some("run") | Some("evaluate") | Some("dump") | Some("help") => rest.remove(0),
+        _ => "run".to_string(),
+    };
+    let mut args = Args { rest };
+    let result = match cmd.as_str() {
+        "help" => {
+            print!("{HELP}");
+            Ok(())
+        }
+        "evaluate" if args.flag(&["-h", "--help"]) => {
+            print!("{EVAL_HELP}");
+            Ok(())
+        }
+        "dump" if args.flag(&["-h", "--help"]) => {
+            print!("{DUMP_HELP}");
+            Ok(())
+        }
+        "run" if args.flag(&["-h", "--help"]) => {
+            print!("{HELP}\n{RUN_HELP}");
+            Ok(())
+        }
+        "evaluate" => cmd_evaluate(args),
+        "dump" => cmd_dump(args),
+        _ => cmd_run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Fail(m, show_usage)) => {
+            eprintln!("error: {m}");
+            if show_usage {
+                eprintln!("(see oit-lab --help)");
+                ExitCode::from(2)
+            } else {
+                ExitCode::from(1)
+            }
+        }
+    }
+}
+
+fn bar(len: u64) -> ProgressBar {
+    let pb = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}] {msg}") {
+        pb.set_style(style);
+    }
+    pb
+}
+
+fn mkdir(p: &Path) -> Result<(), Fail> {
+    std::fs::create_dir_all(p).map_err(|e| runtime(format!("cannot create {}: {e}", p.display())))
+}
+
+/// Write each image and its 4x difference, and return the figure row.
+fn write_pictures(e: &Evaluation, dir: Option<&Path>) -> Result<(Picture, Vec<(Picture, Picture)>), Fail> {
+    let reference = Picture::from_image(&e.reference.image);
+    if let Some(d) = dir {
+        mkdir(d)?;
+        reference.write_png(&d.join("a-buffer.png")).map_err(runtime)?;
+    }
+    let mut cells = Vec::new();
+    for x in &e.entries {
+        let img = Picture::from_image(&x.image);
+        let diff = Picture::difference(&e.reference.image, &x.image, 4.0);
+        if let Some(d) = dir {
+            img.write_png(&d.join(format!("{}.png", x.method.slug())))
+                .map_err(runtime)?;
+            diff.write_png(&d.join(format!("{}-diff4x.png", x.method.slug())))
+                .map_err(runtime)?;
+        }
+        cells.push((img, diff));
+    }
+    Ok((reference, cells))
+}
+
+/// Methods shown in the small figure (docs/figure.png).
+const SMALL: [&str; 8] = [
+    "OVER unsorted",
+    "MLAB 2",
+    "MLAB 4",
+    "HT 3",
+    "HT 7",
+    "AT 4",
+    "WBOIT eq.7",
+    "Meshkin",
+];
+
+fn cmd_run(mut a: Args) -> Result<(), Fail> {
+    let mut size = match a.value("--size")? {
+        Some(s) => parse_size(&s)?,
+        None => (640, 360),
+    };
+    if a.flag(&["--hd"]) {
+        size = (1280, 720);
+    }
+    let seed = parse_seed(&mut a)?;
+    let scenes = match a.value("--scenes")? {
+        Some(list) => list
+            .split(',')
+            .map(|n| Scene::from_name(n.trim()).ok_or_else(|| usage(format!("--scenes: unknown scene '{n}'"))))
+            .collect::<Result<Vec<_>, _>>()?,
+        None => Scene::ALL.to_vec(),
+    };
+    let out = PathBuf::from(a.value("--out")?.unwrap_or_else(|| "out".into()));
+    let with_flip = !a.flag(&["--no-flip"]);
+    let pngs = !a.flag(&["--no-png"]);
+    a.finish()?;
+
+    let start = Instant::now();
+    let methods = Method::standard_list();
+    let pb = bar((scenes.len() * (methods.len() + 1)) as u64);
+    let mut evals = Vec::new();
+    let mut rows = Vec::new();
+    let mut small_rows = Vec::new();
+    for sc in &scenes {
+        pb.set_message(format!("{}: generating", sc.name()));
+        let stream = sc.generate(size.0, size.1, seed);
+        let e = evaluate(sc.name(), &stream, &methods, with_flip, |m| {
+            pb.set_message(format!("{}: {m}", sc.name()));
+            pb.inc(1);
+        })
+        .map_err(runtime)?;
+        let dir = out.join(sc.name().to_ascii_lowercase());
+        let (reference, cells) = write_pictures(&e, pngs.then_some(dir.as_path()))?;
+        let small: Vec<_> = e
+            .entries
+            .iter()
+            .zip(&cells)
+            .filter(|(x, _)| SMALL.contains(&x.method.name().as_str()))
+            .map(|(_, c)| c.clone())
+            .collect();
+        small_rows.push((reference.clone(), small));
+        rows.push((reference, cells));
+        evals.push(e);
+    }
+    pb.finish_and_clear();
+    if pngs {
+        mkdir(&out)?;
+        let f = if size.0 >= 1280 { 8 } else { 4 };
+        figure(&rows, f).write_png(&out.join("figure.png")).map_err(runtime)?;
+        figure(&small_rows, f + f / 4)
+            .write_png(&out.join("figure-small.png"))
+            .map_err(runtime)?;
+    }
+    println!(
+        "# oit-lab: {}x{}, seed {seed}, {} scenes x {} methods, {:.1} s\n",
+        size.0,
+        size.1,
+        scenes.len(),
+        methods.len(),
+        start.elapsed().as_secs_f64()
+    );
+    println!(
+        "## PSNR (dB) / mean FLIP against the A-buffer\n\n{}",
+        summary_table(&evals)
+    );
+    println!("## All metrics\n\n{}", full_table(&evals));
+    if pngs {
+        println!("Figure: {}", out.join("figure.png").display());
+    }
+    Ok(())
+}
+
+fn cmd_dump(mut a: Args) -> Result<(), Fail> {
+    let scene = a.value("--scene")?.ok_or_else(|| usage("dump needs --scene NAME"))?;
+    let scene = Scene::from_name(&scene).ok_or_else(|| usage(format!("--scene: unknown scene '{scene}'")))?;
+    let output = a.value("--output")?.ok_or_else(|| usage("dump needs --output FILE"))?;
+    let size = match a.value("--size")? {
+        Some(s) => parse_size(&s)?,
+        None => (640, 360),
+    };
+    let seed = parse_seed(&mut a)?;
+    a.finish()?;
+    let s = scene.generate(size.0, size.1, seed);
+    dump::write(Path::new(&output), &s).map_err(|e| runtime(e.to_string()))?;
+    println!(
+        "{}: {} fragments, {}x{}, written to {output}",
+        scene.name(),
+        s.frags.len(),
+        size.0,
+        size.1
+    );
+    Ok(())
+}
+
+fn cmd_evaluate(mut a: Args) -> Result<(), Fail> {
+    let file = a
+        .value("--fragments")?
+        .ok_or_else(|| usage("evaluate needs --fragments FILE"))?;
+    let psnr_target = match a.value("--psnr")? {
+        Some(s) => s
+            .parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| usage(format!("--psnr: '{s}' is not a number")))?,
+        None => 40.0,
+    };
+    let flip_target = match a.value("--flip")? {
+        Some(s) => Some(
+            s.parse::<f64>()
+                .ok()
+                .filter(|x| (0.0..=1.0).contains(x))
+                .ok_or_else(|| usage(format!("--flip: '{s}' is not a number in [0, 1]")))?,
+        ),
+        None => None,
+    };
+    let out = a.value("--out")?.map(PathBuf::from);
+    let with_flip = !a.flag(&["--no-flip"]) || flip_target.is_some();
+    a.finish()?;
+    let stream = dump::read(Path::new(&file)).map_err(|e| runtime(e.to_string()))?;
+    let methods = Method::standard_list();
+    let pb = bar(methods.len() as u64 + 1);
+    let name = Path::new(&file)
+        .file_name()
+        .map_or("dump".into(), |n| n.to_string_lossy().to_string());
+    let e = evaluate(&name, &stream, &methods, with_flip, |m| {
+        pb.set_message(m.to_string());
+        pb.inc(1);
+    })
+    .map_err(runtime)?;
+    pb.finish_and_clear();
+    if let Some(d) = &out {
+        write_pictures(&e, Some(d))?;
+    }
+    println!(
+        "# oit-lab evaluate {file}: {}x{}, {} fragments\n",
+        stream.width,
+        stream.height,
+        stream.frags.len()
+    );
+    println!("{}", full_table(std::slice::from_ref(&e)));
+    let goal = match flip_target {
+        Some(f) => format!("PSNR >= {psnr_target} dB and mean FLIP <= {f}"),
+        None => format!("PSNR >= {psnr_target} dB"),
+    };
+    let frame = Frame::new(&stream);
+    let meets = |m: Method| -> Result<bool, Fail> {
+        let img = m.render(&frame).map_err(runtime)?;
+        let q = compare(&e.reference.image, &img, flip_target.is_some());
+        Ok(q.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip.is_some_and(|x| x <= f)))
+    };
+    let mut found = None;
+    for m in MLAB_SIZES {
+        if meets(Method::Mlab(m))? {
+            found = Some(m);
+            break;
+        }
+    }
+    match found {
+        Some(m) => println!("Smallest MLAB reaching {goal}: M = {m} ({} B/px)", 8 * m),
+        None => println!("No MLAB up to M = {} reaches {goal}", MLAB_SIZES[MLAB_SIZES.len() - 1]),
+    }
+    let mut found = None;
+    for k in HT_SIZES {
+        if meets(Method::Hybrid(k))? {
+            found = Some(k);
+            break;
+        }
+    }
+    match found {
+        Some(k) => println!("Smallest HT reaching {goal}: K = {k} ({} B/px)", 8 * (k + 1)),
+        None => println!("No HT up to K = {} reaches {goal}", HT_SIZES[HT_SIZES.len() - 1]),
+    }
+    Ok(())
 }

@@ -1,0 +1,20 @@
+//! oit-lab: how close to the exact image is MLAB with `M` rows on a kind of scene, and what
+//! do the other order-independent transparency methods give for the same memory?
+//!
+//! - [`scenes`]: five deterministic procedural scenes emitting fragment streams in
+//!   submission order ([`stream`]).
+//! - [`methods`]: the exact A-buffer reference and every method as a compositor over the
+//!   same stream (MLAB and HT from the `mlab` kernel).
+//! - [`metrics`]: RMSE, PSNR, max error, FLIP, background visibility bias.
+//! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.
+//! - [`report`]: the whole evaluation of one stream.
+
+#![forbid(unsafe_code)]
+
+pub mod dump;
+pub mod methods;
+pub mod metrics;
+pub mod picture;
+pub mod report;
+pub mod scenes;
+pub mod stream;

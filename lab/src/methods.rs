@@ -1,0 +1,576 @@
+//! The compositing methods, each a function from a frame's fragment stream to an image.
+//!
+//! Every method sees the same [`Frame`]: the stream in submission order, the fragments
+//! grouped per pixel in submission order ([`Frame::bins`]) and sorted front to back
+//! ([`Frame::sorted`], what an application that sorts would submit). Render targets are
+//! emulated at their storage precision: `RGBA16F` rounds every blend result to IEEE half
+//! ([`f16r`]), `R8` rounds to the nearest of 256 levels after every blend ([`r8_blend`]).
+//!
+//! MLAB and HT run in the kernel (`mlab`) through its framebuffer views, fragment by
+//! fragment in submission order, as a pixel shader would. A lane (SIMD) variant of the
+//! kernel becomes one more [`Method`] variant whose `render` calls it; see
+//! [`Method::standard_list`].
+
+use crate::stream::{Bins, Stream};
+use mlab::glam::Vec3;
+use mlab::half::f16;
+use mlab::{HybridFramebuffer, MlabFramebuffer, Resolved, Row};
+
+/// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
+/// visibility of the background (the product of transmittances the method ends up with).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB, row major.
+    pub rgb: Vec<[f32; 3]>,
+    /// Background visibility in `[0, 1]`.
+    pub vis: Vec<f32>,
+}
+
+/// A stream prepared for compositing.
+pub struct Frame<'a> {
+    /// The stream.
+    pub stream: &'a Stream,
+    /// Fragment indices per pixel, in submission order.
+    pub bins: Bins,
+    /// Fragment indices per pixel, front to back (later submission first on equal depth).
+    pub sorted: Bins,
+    /// Seconds spent sorting (part of the A-buffer's cost).
+    pub sort_seconds: f64,
+    /// Near and far depth for the window-space depth of WBOIT's Eq. 10: the stream's
+    /// depth range widened by 10% on each side.
+    pub near_far: (f32, f32),
+}
+
+impl<'a> Frame<'a> {
+    /// Group and sort the stream. The stream must be valid ([`Stream::validate`]);
+    /// otherwise rendering with the kernel methods returns an error.
+    pub fn new(stream: &'a Stream) -> Frame<'a> {
+        let bins = Bins::new(stream);
+        let t = std::time::Instant::now();
+        let sorted = bins.sorted(stream);
+        let sort_seconds = t.elapsed().as_secs_f64();
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for f in &stream.frags {
+            lo = lo.min(f.depth);
+            hi = hi.max(f.depth);
+        }
+        let near_far = if lo > 0.0 && hi.is_finite() {
+            (lo / 1.1, hi * 1.1)
+        } else {
+            (0.0, 1.0)
+        };
+        Frame {
+            stream,
+            bins,
+            sorted,
+            sort_seconds,
+            near_far,
+        }
+    }
+
+    fn bg(&self) -> [f32; 3] {
+        self.stream.background
+    }
+}
+
+/// IEEE half rounding of one stored value (an `RGBA16F` channel after a blend).
+#[inline]
+pub fn f16r(x: f32) -> f32 {
+    f16::from_f32(x).to_f32()
+}
+
+/// One blend into an `R8` (unorm8) target: `dst * factor`, rounded to the nearest level.
+#[inline]
+pub fn r8_blend(dst: u8, factor: f32) -> u8 {
+    (dst as f32 / 255.0 * factor * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// The WBOIT weight functions of McGuire & Bavoil (2013), Eq. 7-10, and the color-aware
+/// variant of seed 001 (LearnOpenGL).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Weight {
+    /// `alpha * clamp(10 / (1e-5 + (|z|/5)^2 + (|z|/200)^6), 1e-2, 3e3)`
+    Eq7,
+    /// `alpha * clamp(10 / (1e-5 + (|z|/10)^3 + (|z|/200)^6), 1e-2, 3e3)`
+    Eq8,
+    /// `alpha * clamp(0.03 / (1e-5 + (|z|/200)^4), 1e-2, 3e3)`
+    Eq9,
+    /// `alpha * max(1e-2, 3e3 * (1 - d)^3)`, `d` the window-space depth.
+    Eq10,
+    /// `max(min(1, max(C.rgb) * alpha), alpha) * clamp(0.03 / (1e-5 + (z/200)^4), 1e-2, 3e3)`
+    /// (seed 001; `max(C.rgb) * alpha` is the largest premultiplied channel).
+    Color,
+}
+
+impl Weight {
+    /// All five.
+    pub const ALL: [Weight; 5] = [Weight::Eq7, Weight::Eq8, Weight::Eq9, Weight::Eq10, Weight::Color];
+
+    /// The weight of a fragment with premultiplied color `c`, alpha `a`, view depth `z`,
+    /// window-space depth `d`.
+    pub fn eval(self, c: [f32; 3], a: f32, z: f32, d: f32) -> f32 {
+        let z = z.abs();
+        match self {
+            Weight::Eq7 => a * (10.0 / (1e-5 + (z / 5.0).powi(2) + (z / 200.0).powi(6))).clamp(1e-2, 3e3),
+            Weight::Eq8 => a * (10.0 / (1e-5 + (z / 10.0).powi(3) + (z / 200.0).powi(6))).clamp(1e-2, 3e3),
+            Weight::Eq9 => a * (0.03 / (1e-5 + (z / 200.0).powi(4))).clamp(1e-2, 3e3),
+            Weight::Eq10 => a * (3e3 * (1.0 - d).powi(3)).max(1e-2),
+            Weight::Color => {
+                let m = c[0].max(c[1]).max(c[2]);
+                m.min(1.0).max(a) * (0.03 / (1e-5 + (z / 200.0).powi(4))).clamp(1e-2, 3e3)
+            }
+        }
+    }
+
+    fn label(self) -> &'static str {
+        match self {
+            Weight::Eq7 => "WBOIT eq.7",
+            Weight::Eq8 => "WBOIT eq.8",
+            Weight::Eq9 => "WBOIT eq.9",
+            Weight::Eq10 => "WBOIT eq.10",
+            Weight::Color => "WBOIT color",
+        }
+    }
+}
+
+/// UNDER blending stops taking fragments once the transmittance is below this.
+pub const UNDER_THRESHOLD: f32 = 0.01;
+
+/// MLAB row counts the lab can run (const generics are instantiated for these).
+pub const MLAB_SIZES: [usize; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 12, 16];
+/// HT head sizes the lab can run.
+pub const HT_SIZES: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 11, 15];
+
+/// A compositing method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Exact: every fragment kept, sorted per pixel, composited front to back in f64.
+    Reference,
+    /// MLAB (kernel, scalar) with `M` rows.
+    Mlab(usize),
+    /// Hybrid Transparency (kernel, scalar) with `K` head rows and a tail.
+    Hybrid(usize),
+    /// OVER in submission order into an `RGBA16F` target (unsorted alpha blending, "AB").
+    Over,
+    /// UNDER, front to back over the sorted stream, `RGBA16F`, transmittance thresholding.
+    Under,
+    /// Weighted Blended OIT with a weight function: `RGBA16F` accumulation + `R8` revealage.
+    Wboit(Weight),
+    /// Bavoil-Myers weighted average: `RGBA16F` sums + `R32F` count.
+    BavoilMyers,
+    /// Meshkin's sort-independent blend (first-order terms): `RGBA16F` sums.
+    Meshkin,
+    /// Adaptive Transparency with `N` visibility nodes, two passes.
+    Adaptive(usize),
+}
+
+impl Method {
+    /// The methods of the main job, in table order. A lanes variant of the kernel goes here
+    /// as one more entry per size (for example `Method::MlabLanes(m)` after `Method::Mlab(m)`).
+    pub fn standard_list() -> Vec<Method> {
+        let mut v = vec![Method::Over, Method::Under];
+        for m in [1, 2, 4, 8] {
+            v.push(Method::Mlab(m));
+        }
+        for m in [1, 2, 4, 8] {
+            v.push(Method::Hybrid(m - 1));
+        }
+        for n in [2, 4, 8] {
+            v.push(Method::Adaptive(n));
+        }
+        v.extend(Weight::ALL.map(Method::Wboit));
+        v.push(Method::BavoilMyers);
+        v.push(Method::Meshkin);
+        v
+    }
+
+    /// Display name.
+    pub fn name(self) -> String {
+        match self {
+            Method::Reference => "A-buffer".into(),
+            Method::Mlab(m) => format!("MLAB {m}"),
+            Method::Hybrid(k) => format!("HT {k}"),
+            Method::Over => "OVER unsorted".into(),
+            Method::Under => "UNDER sorted".into(),
+            Method::Wboit(w) => w.label().into(),
+            Method::BavoilMyers => "Bavoil-Myers".into(),
+            Method::Meshkin => "Meshkin".into(),
+            Method::Adaptive(n) => format!("AT {n}"),
+        }
+    }
+
+    /// A file-name friendly name.
+    pub fn slug(self) -> String {
+        self.name()
+            .to_ascii_lowercase()
+            .replace([' ', '.'], "_")
+            .replace("__", "_")
+    }
+
+    /// Memory per pixel in bytes. For the A-buffer: 12 bytes per stored fragment (RGBA8,
+    /// f32 depth, 32-bit next pointer) plus a 4-byte head pointer, averaged over the frame.
+    pub fn bytes_per_pixel(self, frame: &Frame) -> f64 {
+        match self {
+            Method::Reference => 4.0 + 12.0 * frame.stream.frags.len() as f64 / frame.stream.pixels().max(1) as f64,
+            Method::Mlab(m) => 8.0 * m as f64,
+            Method::Hybrid(k) => 8.0 * (k + 1) as f64,
+            Method::Over | Method::Under | Method::Meshkin => 8.0,
+            Method::Wboit(_) => 9.0,
+            Method::BavoilMyers => 12.0,
+            Method::Adaptive(n) => 8.0 * n as f64 + 8.0,
+        }
+    }
+
+    /// Render the frame. Errors only for a stream the kernel refuses or an unsupported size.
+    pub fn render(self, frame: &Frame) -> Result<Image, String> {
+        match self {
+            Method::Reference => Ok(reference(frame)),
+            Method::Mlab(m) => mlab_dyn(m, frame),
+            Method::Hybrid(k) => hybrid_dyn(k, frame),
+            Method::Over => Ok(over(frame)),
+            Method::Under => Ok(under(frame)),
+            Method::Wboit(w) => Ok(wboit(frame, w)),
+            Method::BavoilMyers => Ok(bavoil_myers(frame)),
+            Method::Meshkin => Ok(meshkin(frame)),
+            Method::Adaptive(0) => Err("AT needs at least one node".into()),
+            Method::Adaptive(n) => Ok(adaptive(frame, n)),
+        }
+    }
+}
+
+/// Run `f` for every pixel, on all cores, and collect the image.
+fn per_pixel<F>(frame: &Frame, f: F) -> Image
+where
+    F: Fn(usize) -> ([f32; 3], f32) + Sync,
+{
+    let s = frame.stream;
+    let n = s.pixels();
+    let mut rgb = vec![[0.0f32; 3]; n];
+    let mut vis = vec![0.0f32; n];
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
+    let chunk = n.div_ceil(threads * 8).max(1024);
+    let work: Vec<_> = rgb.chunks_mut(chunk).zip(vis.chunks_mut(chunk)).enumerate().collect();
+    let work = std::sync::Mutex::new(work);
+    std::thread::scope(|scope| {
+        let (f, work) = (&f, &work);
+        for _ in 0..threads {
+            scope.spawn(move || {
+                loop {
+                    let item = work.lock().map(|mut w| w.pop()).ok().flatten();
+                    let Some((ci, (rc, vc))) = item else { break };
+                    for (j, (r, v)) in rc.iter_mut().zip(vc.iter_mut()).enumerate() {
+                        (*r, *v) = f(ci * chunk + j);
+                    }
+                }
+            });
+        }
+    });
+    Image {
+        width: s.width,
+        height: s.height,
+        rgb,
+        vis,
+    }
+}
+
+fn over_bg(c: [f32; 3], t: f32, bg: [f32; 3]) -> [f32; 3] {
+    [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t]
+}
+
+/// The exact reference: front to back in f64, `C += T * c`, `T *= 1 - a`, then `C + T * bg`.
+fn reference(frame: &Frame) -> Image {
+    let (frags, bg) = (&frame.stream.frags, frame.bg());
+    per_pixel(frame, |p| {
+        let (mut c, mut t) = ([0.0f64; 3], 1.0f64);
+        for &i in frame.sorted.of(p) {
+            let f = &frags[i as usize];
+            for k in 0..3 {
+                c[k] += t * f.color[k] as f64;
+            }
+            t *= 1.0 - f.alpha as f64;
+        }
+        (std::array::from_fn(|k| (c[k] + t * bg[k] as f64) as f32), t as f32)
+    })
+}
+
+fn kernel_image(frame: &Frame, resolve: impl Fn(u32, u32) -> Result<Resolved, String>) -> Result<Image, String> {
+    let s = frame.stream;
+    let bg = Vec3::from(s.background);
+    let mut rgb = Vec::with_capacity(s.pixels());
+    let mut vis = Vec::with_capacity(s.pixels());
+    for y in 0..s.height {
+        for x in 0..s.width {
+            let r = resolve(x, y)?;
+            rgb.push(r.over(bg).to_array());
+            vis.push(r.transmittance);
+        }
+    }
+    Ok(Image {
+        width: s.width,
+        height: s.height,
+        rgb,
+        vis,
+    })
+}
+
+fn err(e: impl std::fmt::Display) -> String {
+    e.to_string()
+}
+
+/// MLAB with the kernel's framebuffer view, in submission order.
+pub fn run_mlab<const M: usize>(frame: &Frame) -> Result<Image, String> {
+    let s = frame.stream;
+    let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = MlabFramebuffer::<M>::new(&mut storage, s.width, s.height).map_err(err)?;
+    for (i, f) in s.frags.iter().enumerate() {
+        let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
+        fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;
+    }
+    kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
+}
+
+/// Hybrid Transparency with the kernel's framebuffer view, in submission order.
+pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<Image, String> {
+    let s = frame.stream;
+    let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = HybridFramebuffer::<K>::new(&mut storage, s.width, s.height).map_err(err)?;
+    for (i, f) in s.frags.iter().enumerate() {
+        let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
+        fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;
+    }
+    kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
+}
+
+fn mlab_dyn(m: usize, frame: &Frame) -> Result<Image, String> {
+    match m {
+        1 => run_mlab::<1>(frame),
+        2 => run_mlab::<2>(frame),
+        3 => run_mlab::<3>(frame),
+        4 => run_mlab::<4>(frame),
+        5 => run_mlab::<5>(frame),
+        6 => run_mlab::<6>(frame),
+        7 => run_mlab::<7>(frame),
+        8 => run_mlab::<8>(frame),
+        12 => run_mlab::<12>(frame),
+        16 => run_mlab::<16>(frame),
+        _ => Err(format!("MLAB {m}: supported row counts are {MLAB_SIZES:?}")),
+    }
+}
+
+fn hybrid_dyn(k: usize, frame: &Frame) -> Result<Image, String> {
+    match k {
+        0 => run_hybrid::<0>(frame),
+        1 => run_hybrid::<1>(frame),
+        2 => run_hybrid::<2>(frame),
+        3 => run_hybrid::<3>(frame),
+        4 => run_hybrid::<4>(frame),
+        5 => run_hybrid::<5>(frame),
+        6 => run_hybrid::<6>(frame),
+        7 => run_hybrid::<7>(frame),
+        11 => run_hybrid::<11>(frame),
+        15 => run_hybrid::<15>(frame),
+        _ => Err(format!("HT {k}: supported head sizes are {HT_SIZES:?}")),
+    }
+}
+
+/// OVER in submission order: `C = c + C * (1 - a)`, `T = T * (1 - a)`, every result
+/// rounded to half; the target starts as the background with `T = 1`.
+fn over(frame: &Frame) -> Image {
+    let (frags, bg) = (&frame.stream.frags, frame.bg());
+    per_pixel(frame, |p| {
+        let (mut c, mut t) = (bg.map(f16r), 1.0f32);
+        for &i in frame.bins.of(p) {
+            let f = &frags[i as usize];
+            for k in 0..3 {
+                c[k] = f16r(f.color[k] + c[k] * (1.0 - f.alpha));
+            }
+            t = f16r(t * (1.0 - f.alpha));
+        }
+        (c, t)
+    })
+}
+
+/// UNDER front to back over the sorted fragments (seed 004): `C = C + T * c`,
+/// `T = T * (1 - a)`, rounded to half; a fragment arriving when `T < UNDER_THRESHOLD` is
+/// discarded. The background is composited last with the remaining `T`.
+fn under(frame: &Frame) -> Image {
+    let (frags, bg) = (&frame.stream.frags, frame.bg());
+    per_pixel(frame, |p| {
+        let (mut c, mut t) = ([0.0f32; 3], 1.0f32);
+        for &i in frame.sorted.of(p) {
+            if t < UNDER_THRESHOLD {
+                break;
+            }
+            let f = &frags[i as usize];
+            for k in 0..3 {
+                c[k] = f16r(c[k] + t * f.color[k]);
+            }
+            t = f16r(t * (1.0 - f.alpha));
+        }
+        (over_bg(c, t, bg), t)
+    })
+}
+
+/// Window-space depth of a perspective projection with the frame's near and far planes.
+fn window_depth(z: f32, (near, far): (f32, f32)) -> f32 {
+    if near > 0.0 {
+        (far * (z - near) / (z * (far - near))).clamp(0.0, 1.0)
+    } else {
+        z.clamp(0.0, 1.0)
+    }
+}
+
+/// Non-finite results (a half target that overflowed: inf / inf) are shown black.
+fn finite_or_zero(x: f32) -> f32 {
+    if x.is_finite() { x } else { 0.0 }
+}
+
+/// WBOIT: `acc += (c * w, a * w)` in half, `r *= 1 - a` in unorm8;
+/// `C = acc.rgb / max(acc.a, 1e-5) * (1 - r) + bg * r`.
+fn wboit(frame: &Frame, weight: Weight) -> Image {
+    let (frags, bg, nf) = (&frame.stream.frags, frame.bg(), frame.near_far);
+    per_pixel(frame, |p| {
+        let (mut acc, mut r) = ([0.0f32; 4], 255u8);
+        for &i in frame.bins.of(p) {
+            let f = &frags[i as usize];
+            let w = weight.eval(f.color, f.alpha, f.depth, window_depth(f.depth, nf));
+            for k in 0..3 {
+                acc[k] = f16r(acc[k] + f.color[k] * w);
+            }
+            acc[3] = f16r(acc[3] + f.alpha * w);
+            r = r8_blend(r, 1.0 - f.alpha);
+        }
+        let rv = r as f32 / 255.0;
+        let d = acc[3].max(1e-5);
+        let c = std::array::from_fn(|k| finite_or_zero(acc[k] / d * (1.0 - rv) + bg[k] * rv));
+        (c, rv)
+    })
+}
+
+/// Bavoil-Myers (seed 004, as in HT's tail): `n` fragments, `S_c`, `S_a` sums;
+/// `T = (1 - S_a / n)^n`, `C = S_c / S_a * (1 - T) + bg * T` (`S_c + bg` when `S_a = 0`).
+fn bavoil_myers(frame: &Frame) -> Image {
+    let (frags, bg) = (&frame.stream.frags, frame.bg());
+    per_pixel(frame, |p| {
+        let (mut acc, mut n) = ([0.0f32; 4], 0.0f32);
+        for &i in frame.bins.of(p) {
+            let f = &frags[i as usize];
+            for k in 0..3 {
+                acc[k] = f16r(acc[k] + f.color[k]);
+            }
+            acc[3] = f16r(acc[3] + f.alpha);
+            n += 1.0;
+        }
+        if n == 0.0 {
+            return (bg, 1.0);
+        }
+        let mean = (acc[3] / n).min(1.0);
+        let t = (1.0 - mean).powi(n as i32);
+        let g = if acc[3] > 0.0 { (1.0 - t) / acc[3] } else { 1.0 };
+        (std::array::from_fn(|k| finite_or_zero(acc[k] * g + bg[k] * t)), t)
+    })
+}
+
+/// Meshkin (seed 003), the order-independent first-order terms of the expanded OVER:
+/// `C = sum(a * C) + bg * max(0, 1 - sum(a))`, sums in half.
+fn meshkin(frame: &Frame) -> Image {
+    let (frags, bg) = (&frame.stream.frags, frame.bg());
+    per_pixel(frame, |p| {
+        let mut acc = [0.0f32; 4];
+        for &i in frame.bins.of(p) {
+            let f = &frags[i as usize];
+            for k in 0..3 {
+                acc[k] = f16r(acc[k] + f.color[k]);
+            }
+            acc[3] = f16r(acc[3] + f.alpha);
+        }
+        let t = (1.0 - acc[3]).max(0.0);
+        (std::array::from_fn(|k| finite_or_zero(acc[k] + bg[k] * t)), t)
+    })
+}
+
+/// Adaptive Transparency's visibility function: nodes `(z, T)` sorted front to back, where
+/// `T` is the visibility just behind `z`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Visibility {
+    /// The nodes, front to back.
+    pub nodes: Vec<(f32, f32)>,
+}
+
+impl Visibility {
+    /// Insert a fragment of alpha `a` at depth `z` (in front of nodes at equal depth),
+    /// attenuate every node behind it, and while there are more than `n` nodes remove the
+    /// node `i >= 1` with the smallest area variation `(z_i - z_(i-1)) * (T_(i-1) - T_i)`:
+    /// node `i - 1` takes `T_i` (visibility is underestimated, never overestimated).
+    pub fn insert(&mut self, z: f32, a: f32, n: usize) {
+        if a <= 0.0 {
+            return;
+        }
+        let pos = self
+            .nodes
+            .iter()
+            .position(|&(nz, _)| nz >= z)
+            .unwrap_or(self.nodes.len());
+        let before = if pos == 0 { 1.0 } else { self.nodes[pos - 1].1 };
+        self.nodes.insert(pos, (z, before * (1.0 - a)));
+        for node in &mut self.nodes[pos + 1..] {
+            node.1 *= 1.0 - a;
+        }
+        while self.nodes.len() > n.max(1) {
+            let mut best = 1;
+            let mut best_area = f32::INFINITY;
+            for i in 1..self.nodes.len() {
+                let area = (self.nodes[i].0 - self.nodes[i - 1].0) * (self.nodes[i - 1].1 - self.nodes[i].1);
+                if area < best_area {
+                    best_area = area;
+                    best = i;
+                }
+            }
+            self.nodes[best - 1].1 = self.nodes[best].1;
+            self.nodes.remove(best);
+        }
+    }
+
+    /// Visibility at depth `z`: `T` of the last node strictly in front of `z`, else 1.
+    pub fn at(&self, z: f32) -> f32 {
+        self.nodes
+            .iter()
+            .take_while(|&&(nz, _)| nz < z)
+            .last()
+            .map_or(1.0, |&(_, t)| t)
+    }
+
+    /// Visibility behind everything (of the background).
+    pub fn total(&self) -> f32 {
+        self.nodes.last().map_or(1.0, |&(_, t)| t)
+    }
+}
+
+/// Adaptive Transparency, two passes: build the visibility function with `n` nodes in
+/// submission order, then `C = sum(c * vis(z))` in half, plus `bg * vis(inf)`.
+fn adaptive(frame: &Frame, n: usize) -> Image {
+    let (frags, bg) = (&frame.stream.frags, frame.bg());
+    per_pixel(frame, |p| {
+        let mut v = Visibility {
+            nodes: Vec::with_capacity(n + 1),
+        };
+        for &i in frame.bins.of(p) {
+            let f = &frags[i as usize];
+            v.insert(f.depth, f.alpha, n);
+        }
+        let mut c = [0.0f32; 3];
+        for &i in frame.bins.of(p) {
+            let f = &frags[i as usize];
+            let vis = v.at(f.depth);
+            for k in 0..3 {
+                c[k] = f16r(c[k] + f.color[k] * vis);
+            }
+        }
+        let t = v.total();
+        (over_bg(c, t, bg), t)
+    })
+}

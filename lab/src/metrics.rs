@@ -1,0 +1,84 @@
+//! Quality metrics of an image against the reference.
+//!
+//! Color metrics are computed on what a display shows: linear RGB clamped to `[0, 1]`
+//! (additive light above 1 saturates). FLIP (NVIDIA's perceptual difference, LDR variant,
+//! through the `nv-flip` crate) takes both images sRGB-encoded to 8 bits, at the default
+//! 67 pixels per degree.
+
+use crate::methods::Image;
+
+/// The metrics of one image against the reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quality {
+    /// Root mean square error over every pixel and channel (linear, clamped).
+    pub rmse: f64,
+    /// `20 log10(1 / rmse)` in dB (infinite for identical images).
+    pub psnr: f64,
+    /// Largest absolute channel error.
+    pub max_abs: f64,
+    /// Mean FLIP error in `[0, 1]`, when computed.
+    pub flip: Option<f64>,
+    /// Mean of `vis(method) - vis(reference)`: positive means the background shows through
+    /// too much.
+    pub vis_bias: f64,
+}
+
+/// sRGB encoding of a linear value, clamped, to 8 bits.
+pub fn srgb8(x: f32) -> u8 {
+    let x = if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+    let e = if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    };
+    (e * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+/// The image as sRGB8, row major, 3 bytes per pixel.
+pub fn to_srgb8(img: &Image) -> Vec<u8> {
+    img.rgb.iter().flat_map(|p| p.map(srgb8)).collect()
+}
+
+fn display(x: f32) -> f64 {
+    if x.is_finite() { x.clamp(0.0, 1.0) as f64 } else { 0.0 }
+}
+
+/// RMSE, PSNR, max error and visibility bias of `test` against `reference` (same size);
+/// FLIP when `with_flip`.
+pub fn compare(reference: &Image, test: &Image, with_flip: bool) -> Quality {
+    assert_eq!((reference.width, reference.height), (test.width, test.height));
+    let n = reference.rgb.len().max(1);
+    let (mut se, mut max_abs, mut vb) = (0.0f64, 0.0f64, 0.0f64);
+    for (a, b) in reference.rgb.iter().zip(&test.rgb) {
+        for k in 0..3 {
+            let d = display(a[k]) - display(b[k]);
+            se += d * d;
+            max_abs = max_abs.max(d.abs());
+        }
+    }
+    for (a, b) in reference.vis.iter().zip(&test.vis) {
+        vb += *b as f64 - *a as f64;
+    }
+    let rmse = (se / (3 * n) as f64).sqrt();
+    let psnr = if rmse > 0.0 {
+        20.0 * (1.0 / rmse).log10()
+    } else {
+        f64::INFINITY
+    };
+    let flip = with_flip.then(|| flip_mean(reference, test));
+    Quality {
+        rmse,
+        psnr,
+        max_abs,
+        flip,
+        vis_bias: vb / n as f64,
+    }
+}
+
+/// Mean FLIP of `test` against `reference`.
+pub fn flip_mean(reference: &Image, test: &Image) -> f64 {
+    let r = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &to_srgb8(reference));
+    let t = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &to_srgb8(test));
+    let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&err).mean() as f64
+}

@@ -1,0 +1,128 @@
+//! PNG output: single images, difference images and the Figure 3 grid.
+
+use crate::methods::Image;
+use crate::metrics::srgb8;
+use std::path::Path;
+
+/// An 8-bit RGB picture.
+#[derive(Clone, Debug)]
+pub struct Picture {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// RGB bytes, row major.
+    pub data: Vec<u8>,
+}
+
+impl Picture {
+    /// A picture filled with one color.
+    pub fn filled(width: u32, height: u32, rgb: [u8; 3]) -> Picture {
+        Picture {
+            width,
+            height,
+            data: rgb.repeat(width as usize * height as usize),
+        }
+    }
+
+    /// An image sRGB-encoded.
+    pub fn from_image(img: &Image) -> Picture {
+        Picture {
+            width: img.width,
+            height: img.height,
+            data: crate::metrics::to_srgb8(img),
+        }
+    }
+
+    /// `|test - reference|` per channel on the display values, times `gain`, sRGB-encoded.
+    pub fn difference(reference: &Image, test: &Image, gain: f32) -> Picture {
+        let d = |a: f32, b: f32| {
+            let c = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+            srgb8((c(a) - c(b)).abs() * gain)
+        };
+        let data = reference
+            .rgb
+            .iter()
+            .zip(&test.rgb)
+            .flat_map(|(a, b)| [0, 1, 2].map(|k| d(a[k], b[k])))
+            .collect();
+        Picture {
+            width: reference.width,
+            height: reference.height,
+            data,
+        }
+    }
+
+    /// Box-filtered down by an integer factor (at least 1).
+    pub fn downscale(&self, f: u32) -> Picture {
+        let f = f.max(1);
+        let (w, h) = (self.width / f, self.height / f);
+        let mut data = Vec::with_capacity((w * h * 3) as usize);
+        for y in 0..h {
+            for x in 0..w {
+                for k in 0..3 {
+                    let mut s = 0u32;
+                    for dy in 0..f {
+                        for dx in 0..f {
+                            s += self.data[(((y * f + dy) * self.width + x * f + dx) * 3 + k) as usize] as u32;
+                        }
+                    }
+                    data.push(((s + f * f / 2) / (f * f)) as u8);
+                }
+            }
+        }
+        Picture {
+            width: w,
+            height: h,
+            data,
+        }
+    }
+
+    /// Copy `src` with its top-left corner at `(x, y)` (clipped).
+    pub fn blit(&mut self, src: &Picture, x: u32, y: u32) {
+        for sy in 0..src.height.min(self.height.saturating_sub(y)) {
+            let n = (src.width.min(self.width.saturating_sub(x)) * 3) as usize;
+            let d0 = (((y + sy) * self.width + x) * 3) as usize;
+            let s0 = ((sy * src.width) * 3) as usize;
+            self.data[d0..d0 + n].copy_from_slice(&src.data[s0..s0 + n]);
+        }
+    }
+
+    /// Write as an 8-bit RGB PNG.
+    pub fn write_png(&self, path: &Path) -> Result<(), String> {
+        let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), self.width, self.height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_compression(png::Compression::Fast);
+        let mut w = enc.write_header().map_err(|e| format!("{}: {e}", path.display()))?;
+        w.write_image_data(&self.data)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        w.finish().map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
+
+/// The Figure 3 grid: for each scene two rows, the images (reference first, then each
+/// method) and under each method its difference image; each cell downscaled by `factor`,
+/// with a 2-pixel gap.
+pub fn figure(rows: &[(Picture, Vec<(Picture, Picture)>)], factor: u32) -> Picture {
+    let gap = 2;
+    let Some((r0, _)) = rows.first() else {
+        return Picture::filled(1, 1, [0; 3]);
+    };
+    let (cw, ch) = (r0.width / factor.max(1), r0.height / factor.max(1));
+    let cols = rows.iter().map(|(_, m)| m.len() + 1).max().unwrap_or(1) as u32;
+    let w = cols * (cw + gap) + gap;
+    let h = rows.len() as u32 * 2 * (ch + gap) + gap;
+    let mut out = Picture::filled(w, h, [255, 255, 255]);
+    for (ri, (reference, methods)) in rows.iter().enumerate() {
+        let y = gap + ri as u32 * 2 * (ch + gap);
+        out.blit(&reference.downscale(factor), gap, y);
+        for (mi, (img, diff)) in methods.iter().enumerate() {
+            let x = gap + (mi as u32 + 1) * (cw + gap);
+            out.blit(&img.downscale(factor), x, y);
+            out.blit(&diff.downscale(factor), x, y + ch + gap);
+        }
+    }
+    out
+}

@@ -1,0 +1,155 @@
+//! The evaluation of one stream: the reference, every method, their metrics and timings,
+//! and the Markdown tables.
+
+use crate::methods::{Frame, Image, Method};
+use crate::metrics::{Quality, compare};
+use crate::stream::Stream;
+use std::time::Instant;
+
+/// One method's result on one stream.
+pub struct Entry {
+    /// The method.
+    pub method: Method,
+    /// Its image.
+    pub image: Image,
+    /// Metrics against the reference.
+    pub quality: Quality,
+    /// Memory per pixel in bytes.
+    pub bytes: f64,
+    /// Milliseconds to composite the frame (the A-buffer's includes its sort).
+    pub ms: f64,
+}
+
+/// Everything measured on one stream.
+pub struct Evaluation {
+    /// Scene or file name.
+    pub name: String,
+    /// Number of fragments.
+    pub fragments: usize,
+    /// Largest fragment count of a pixel.
+    pub max_depth: usize,
+    /// The reference entry (metrics against itself: all zero).
+    pub reference: Entry,
+    /// The methods, in the order asked.
+    pub entries: Vec<Entry>,
+}
+
+/// Render `stream` with the reference and `methods`, compare each with the reference.
+/// `tick` is called after each rendered image (for a progress bar).
+pub fn evaluate(
+    name: &str,
+    stream: &Stream,
+    methods: &[Method],
+    with_flip: bool,
+    mut tick: impl FnMut(&str),
+) -> Result<Evaluation, String> {
+    stream
+        .validate()
+        .map_err(|(i, e)| format!("{name}: fragment {i}: {e}"))?;
+    let frame = Frame::new(stream);
+    let t = Instant::now();
+    let image = Method::Reference.render(&frame)?;
+    let ms = (t.elapsed().as_secs_f64() + frame.sort_seconds) * 1e3;
+    let quality = compare(&image, &image, false);
+    let reference = Entry {
+        method: Method::Reference,
+        bytes: Method::Reference.bytes_per_pixel(&frame),
+        image,
+        quality,
+        ms,
+    };
+    tick("A-buffer");
+    let mut entries = Vec::with_capacity(methods.len());
+    for &m in methods {
+        let t = Instant::now();
+        let image = m.render(&frame)?;
+        let ms = t.elapsed().as_secs_f64() * 1e3;
+        let quality = compare(&reference.image, &image, with_flip);
+        entries.push(Entry {
+            method: m,
+            bytes: m.bytes_per_pixel(&frame),
+            image,
+            quality,
+            ms,
+        });
+        tick(&m.name());
+    }
+    Ok(Evaluation {
+        name: name.to_string(),
+        fragments: stream.frags.len(),
+        max_depth: frame.bins.max_depth_complexity(),
+        reference,
+        entries,
+    })
+}
+
+fn num(x: f64, digits: usize) -> String {
+    if x.is_infinite() {
+        "inf".into()
+    } else {
+        format!("{x:.digits$}")
+    }
+}
+
+/// The full Markdown table: one row per scene and method.
+pub fn full_table(evals: &[Evaluation]) -> String {
+    let mut s = String::from(
+        "| scene | method | B/px | ms | RMSE | PSNR dB | max err | mean FLIP | vis bias |\n|---|---|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for e in evals {
+        let r = &e.reference;
+        s += &format!(
+            "| {} | {} ({} frags, max {}/px) | {:.1} | {:.1} | 0 | inf | 0 | 0 | 0 |\n",
+            e.name,
+            r.method.name(),
+            e.fragments,
+            e.max_depth,
+            r.bytes,
+            r.ms
+        );
+        for x in &e.entries {
+            let q = &x.quality;
+            s += &format!(
+                "| {} | {} | {:.0} | {:.1} | {:.4} | {} | {:.3} | {} | {:+.4} |\n",
+                e.name,
+                x.method.name(),
+                x.bytes,
+                x.ms,
+                q.rmse,
+                num(q.psnr, 1),
+                q.max_abs,
+                q.flip.map_or("-".into(), |f| format!("{f:.4}")),
+                q.vis_bias
+            );
+        }
+    }
+    s
+}
+
+/// The summary: one row per method, PSNR / mean FLIP per scene.
+pub fn summary_table(evals: &[Evaluation]) -> String {
+    let Some(first) = evals.first() else {
+        return String::new();
+    };
+    let mut s = String::from("| method | B/px |");
+    for e in evals {
+        s += &format!(" {} PSNR / FLIP |", e.name);
+    }
+    s += "\n|---|---:|";
+    s += &"---:|".repeat(evals.len());
+    s += "\n";
+    for (i, x) in first.entries.iter().enumerate() {
+        s += &format!("| {} | {:.0} |", x.method.name(), x.bytes);
+        for e in evals {
+            match e.entries.get(i) {
+                Some(y) => {
+                    let f = y.quality.flip.map_or("-".into(), |f| format!("{f:.3}"));
+                    s += &format!(" {} / {} |", num(y.quality.psnr, 1), f);
+                }
+                None => s += " - |",
+            }
+        }
+        s += "\n";
+    }
+    s
+}
