@@ -5,7 +5,7 @@ use oit_lab::dump;
 use oit_lab::methods::{Frame, HT_SIZES, MLAB_SIZES, Method};
 use oit_lab::metrics::compare;
 use oit_lab::picture::{Picture, figure};
-use oit_lab::report::{Evaluation, evaluate, full_table, summary_table};
+use oit_lab::report::{Evaluation, evaluate, full_table, summary_table, vis_bias_where};
 use oit_lab::scenes::Scene;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -294,6 +294,15 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
         summary_table(&evals)
     );
     println!("## All metrics\n\n{}", full_table(&evals));
+    for e in evals.iter().filter(|e| e.name == "PARTICLES") {
+        println!("## Background visibility bias on PARTICLES (mean signed error, covered pixels)\n");
+        println!("| method | >= 1 fragment | >= 32 fragments |\n|---|---:|---:|");
+        let (a, b) = (vis_bias_where(e, 1), vis_bias_where(e, 32));
+        for ((name, x, n1), (_, y, n2)) in a.iter().zip(&b) {
+            println!("| {name} | {x:+.4} ({n1} px) | {y:+.4} ({n2} px) |");
+        }
+        println!();
+    }
     if pngs {
         println!("Figure: {}", out.join("figure.png").display());
     }

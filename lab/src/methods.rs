@@ -326,6 +326,7 @@ pub fn run_mlab<const M: usize>(frame: &Frame) -> Result<Image, String> {
     let s = frame.stream;
     let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M>::rows_needed(s.width, s.height).map_err(err)?];
     let mut fb = MlabFramebuffer::<M>::new(&mut storage, s.width, s.height).map_err(err)?;
+    fb.clear();
     for (i, f) in s.frags.iter().enumerate() {
         let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
         fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;
@@ -338,6 +339,8 @@ pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<Image, String> {
     let s = frame.stream;
     let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K>::rows_needed(s.width, s.height).map_err(err)?];
     let mut fb = HybridFramebuffer::<K>::new(&mut storage, s.width, s.height).map_err(err)?;
+    // The tail slot of `Row::EMPTY` bytes is not `Tail::EMPTY`: clear for a new frame.
+    fb.clear();
     for (i, f) in s.frags.iter().enumerate() {
         let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
         fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;

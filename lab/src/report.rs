@@ -28,6 +28,8 @@ pub struct Evaluation {
     pub fragments: usize,
     /// Largest fragment count of a pixel.
     pub max_depth: usize,
+    /// Fragment count per pixel.
+    pub counts: Vec<u32>,
     /// The reference entry (metrics against itself: all zero).
     pub reference: Entry,
     /// The methods, in the order asked.
@@ -59,12 +61,35 @@ pub fn evaluate(
         ms,
     };
     tick("A-buffer");
-    let mut entries = Vec::with_capacity(methods.len());
+    // Render one method at a time (each uses every core, so the timings are comparable),
+    // then compute the metrics of all of them on all cores.
+    let mut rendered = Vec::with_capacity(methods.len());
     for &m in methods {
         let t = Instant::now();
         let image = m.render(&frame)?;
         let ms = t.elapsed().as_secs_f64() * 1e3;
-        let quality = compare(&reference.image, &image, with_flip);
+        rendered.push((m, image, ms));
+        tick(&m.name());
+    }
+    let queue = std::sync::Mutex::new((0..rendered.len()).rev().collect::<Vec<_>>());
+    let results = std::sync::Mutex::new(vec![None; rendered.len()]);
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| {
+                while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
+                    let q = compare(&reference.image, &rendered[i].1, with_flip);
+                    if let Ok(mut r) = results.lock() {
+                        r[i] = Some(q);
+                    }
+                }
+            });
+        }
+    });
+    let results = results.into_inner().map_err(|_| "metrics thread failed".to_string())?;
+    let mut entries = Vec::with_capacity(methods.len());
+    for ((m, image, ms), q) in rendered.into_iter().zip(results) {
+        let quality = q.ok_or("metrics thread failed")?;
         entries.push(Entry {
             method: m,
             bytes: m.bytes_per_pixel(&frame),
@@ -72,12 +97,12 @@ pub fn evaluate(
             quality,
             ms,
         });
-        tick(&m.name());
     }
     Ok(Evaluation {
         name: name.to_string(),
         fragments: stream.frags.len(),
         max_depth: frame.bins.max_depth_complexity(),
+        counts: frame.bins.start.windows(2).map(|w| w[1] - w[0]).collect(),
         reference,
         entries,
     })
@@ -152,4 +177,20 @@ pub fn summary_table(evals: &[Evaluation]) -> String {
         s += "\n";
     }
     s
+}
+
+/// Mean signed error of background visibility over the pixels with at least `min_frags`
+/// fragments, per method: `(method name, bias, pixels)`.
+pub fn vis_bias_where(e: &Evaluation, min_frags: u32) -> Vec<(String, f64, usize)> {
+    let sel: Vec<usize> = (0..e.counts.len()).filter(|&p| e.counts[p] >= min_frags).collect();
+    e.entries
+        .iter()
+        .map(|x| {
+            let s: f64 = sel
+                .iter()
+                .map(|&p| x.image.vis[p] as f64 - e.reference.image.vis[p] as f64)
+                .sum();
+            (x.method.name(), s / sel.len().max(1) as f64, sel.len())
+        })
+        .collect()
 }

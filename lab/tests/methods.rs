@@ -1,0 +1,273 @@
+//! Every method against a hand-computed case of its own formula, on 1x1 frames.
+
+use oit_lab::methods::{Frame, Image, Method, Visibility, Weight};
+use oit_lab::stream::{Frag, Stream};
+
+/// A 1x1 stream from `(depth, premultiplied color, alpha)` in submission order.
+fn pixel(frags: &[(f32, [f32; 3], f32)], bg: [f32; 3]) -> Stream {
+    let frags = frags
+        .iter()
+        .map(|&(depth, color, alpha)| Frag {
+            pixel: 0,
+            depth,
+            color,
+            alpha,
+        })
+        .collect();
+    Stream {
+        width: 1,
+        height: 1,
+        background: bg,
+        frags,
+    }
+}
+
+fn render(m: Method, s: &Stream) -> Image {
+    m.render(&Frame::new(s)).expect("render")
+}
+
+fn close(got: [f32; 3], want: [f32; 3], tol: f32) {
+    for k in 0..3 {
+        assert!(
+            (got[k] - want[k]).abs() <= tol,
+            "channel {k}: got {got:?}, want {want:?} (tol {tol})"
+        );
+    }
+}
+
+const RED: [f32; 3] = [0.5, 0.0, 0.0];
+const GREEN: [f32; 3] = [0.0, 0.5, 0.0];
+const BLUE: [f32; 3] = [0.0, 0.0, 0.5];
+const WHITE: [f32; 3] = [1.0, 1.0, 1.0];
+
+#[test]
+fn reference_sorts_back_to_front_submission() {
+    // red behind (z 2) submitted first, blue in front (z 1): blue*1 + red*0.5 + white*0.25.
+    let img = render(Method::Reference, &pixel(&[(2.0, RED, 0.5), (1.0, BLUE, 0.5)], WHITE));
+    close(img.rgb[0], [0.25 + 0.25, 0.25, 0.5 + 0.25], 1e-6);
+    assert_eq!(img.vis[0], 0.25);
+}
+
+#[test]
+fn reference_three_layers() {
+    // Front to back: green a 0.25 (z 1), red a 0.5 (z 3), blue a 1 (z 7); submitted 3, 7, 1.
+    let s = pixel(
+        &[
+            (3.0, RED, 0.5),
+            (7.0, [0.0, 0.0, 1.0], 1.0),
+            (1.0, [0.0, 0.25, 0.0], 0.25),
+        ],
+        WHITE,
+    );
+    let img = render(Method::Reference, &s);
+    // C = g + 0.75 * r + 0.75 * 0.5 * b, T = 0.
+    close(img.rgb[0], [0.375, 0.25, 0.375], 1e-6);
+    assert_eq!(img.vis[0], 0.0);
+}
+
+#[test]
+fn reference_later_submission_in_front_on_ties() {
+    let img = render(
+        Method::Reference,
+        &pixel(&[(1.0, RED, 0.5), (1.0, GREEN, 0.5)], [0.0; 3]),
+    );
+    // Green (later) in front: green + 0.5 * red.
+    close(img.rgb[0], [0.25, 0.5, 0.0], 1e-6);
+}
+
+#[test]
+fn reference_empty_pixel_is_background() {
+    let img = render(Method::Reference, &pixel(&[], [0.2, 0.3, 0.4]));
+    close(img.rgb[0], [0.2, 0.3, 0.4], 0.0);
+    assert_eq!(img.vis[0], 1.0);
+}
+
+#[test]
+fn over_follows_submission_order_not_depth() {
+    // Red (z 1, nearer) drawn first, blue (z 2) drawn over it: blue + 0.5 red + 0.25 white.
+    let img = render(Method::Over, &pixel(&[(1.0, RED, 0.5), (2.0, BLUE, 0.5)], WHITE));
+    close(img.rgb[0], [0.25 + 0.25, 0.25, 0.5 + 0.25], 0.0);
+    assert_eq!(img.vis[0], 0.25);
+}
+
+#[test]
+fn under_is_exact_on_sorted_layers_and_cuts_below_threshold() {
+    let img = render(Method::Under, &pixel(&[(2.0, RED, 0.5), (1.0, BLUE, 0.5)], WHITE));
+    close(img.rgb[0], [0.5, 0.25, 0.75], 0.0);
+    // First layer leaves T = 0.005 < 0.01: the green layer behind is discarded.
+    let s = pixel(&[(1.0, [0.995, 0.0, 0.0], 0.995), (2.0, [0.0, 1.0, 0.0], 1.0)], WHITE);
+    let img = render(Method::Under, &s);
+    let t = img.vis[0];
+    assert!((t - 0.005).abs() < 1e-4, "T = {t}");
+    close(img.rgb[0], [0.995 + t, t, t], 1e-3);
+}
+
+#[test]
+fn wboit_eq7_two_fragments() {
+    let (a1, z1, a2, z2) = (0.5f32, 5.0f32, 0.5f32, 10.0f32);
+    // w = a * clamp(10 / (1e-5 + (z/5)^2 + (z/200)^6), 1e-2, 3e3)
+    let w1 = a1 * 10.0 / (1e-5 + 1.0 + (5.0f32 / 200.0).powi(6));
+    let w2 = a2 * 10.0 / (1e-5 + 4.0 + (10.0f32 / 200.0).powi(6));
+    let s = pixel(&[(z1, RED, a1), (z2, GREEN, a2)], WHITE);
+    let img = render(Method::Wboit(Weight::Eq7), &s);
+    // R8 revealage: 255 * 0.5 = 127.5 -> 128, then 128 * 0.5 = 64.
+    let r = 64.0 / 255.0;
+    let d = a1 * w1 + a2 * w2;
+    let want = [0.5 * w1 / d * (1.0 - r) + r, 0.5 * w2 / d * (1.0 - r) + r, r];
+    close(img.rgb[0], want, 2e-3);
+    assert_eq!(img.vis[0], r);
+}
+
+#[test]
+fn wboit_weights_match_the_published_formulas() {
+    let c = [0.8, 0.1, 0.0];
+    // Eq. 7 at z = 5: 10 / (1e-5 + 1 + 40^-6) ~ 10 (times alpha).
+    assert!((Weight::Eq7.eval(c, 0.5, 5.0, 0.5) - 5.0).abs() < 1e-3);
+    // Eq. 8 at z = 20: 10 / (1e-5 + 8 + 10^-6) = 1.25.
+    assert!((Weight::Eq8.eval(c, 1.0, 20.0, 0.5) - 1.25).abs() < 1e-4);
+    // Eq. 9 at z = 200: 0.03 / (1e-5 + 1) ~ 0.03; clamped from below far away.
+    assert!((Weight::Eq9.eval(c, 1.0, 200.0, 0.5) - 0.03).abs() < 1e-5);
+    assert_eq!(Weight::Eq9.eval(c, 1.0, 2000.0, 0.5), 1e-2);
+    // Eq. 9 near: 0.03 / (1e-5 + 200^-4), just under the 3e3 clamp.
+    assert!((Weight::Eq9.eval(c, 1.0, 1.0, 0.5) - 2999.8125).abs() < 0.01);
+    // Eq. 7 very near: clamped at 3e3.
+    assert_eq!(Weight::Eq7.eval(c, 1.0, 0.01, 0.5), 3e3);
+    // Eq. 10: 3e3 * (1 - d)^3, at least 1e-2.
+    assert_eq!(Weight::Eq10.eval(c, 1.0, 10.0, 0.0), 3e3);
+    assert!((Weight::Eq10.eval(c, 1.0, 10.0, 0.5) - 375.0).abs() < 1e-3);
+    assert_eq!(Weight::Eq10.eval(c, 1.0, 10.0, 1.0), 1e-2);
+    // Color-aware: max(min(1, max premultiplied channel), alpha) * Eq. 9 factor.
+    assert!((Weight::Color.eval(c, 0.5, 200.0, 0.5) - 0.8 * 0.03).abs() < 1e-5);
+    assert!((Weight::Color.eval([0.1, 0.1, 0.1], 0.5, 200.0, 0.5) - 0.5 * 0.03).abs() < 1e-5);
+}
+
+#[test]
+fn bavoil_myers_two_fragments() {
+    // S_a = 1, n = 2, T = (1 - 0.5)^2 = 0.25, C = S_c / S_a * 0.75.
+    let img = render(
+        Method::BavoilMyers,
+        &pixel(&[(1.0, RED, 0.5), (2.0, GREEN, 0.5)], [0.0; 3]),
+    );
+    close(img.rgb[0], [0.375, 0.375, 0.0], 0.0);
+    assert_eq!(img.vis[0], 0.25);
+}
+
+#[test]
+fn meshkin_two_fragments() {
+    // sum(C) + bg * (1 - sum(a)): (0.5, 0, 0.25) + 0.25.
+    let img = render(
+        Method::Meshkin,
+        &pixel(&[(1.0, RED, 0.5), (2.0, [0.0, 0.0, 0.25], 0.25)], WHITE),
+    );
+    close(img.rgb[0], [0.75, 0.25, 0.5], 0.0);
+    // More than full opacity: the background term stops at 0, colors add.
+    let img = render(Method::Meshkin, &pixel(&[(1.0, RED, 0.75), (2.0, GREEN, 0.75)], WHITE));
+    close(img.rgb[0], [0.5, 0.5, 0.0], 0.0);
+}
+
+#[test]
+fn adaptive_exact_with_enough_nodes_and_darkens_when_compressed() {
+    let s = pixel(&[(1.0, RED, 0.5), (2.0, GREEN, 0.5)], WHITE);
+    // Two nodes: exact, red + 0.5 green + 0.25 white.
+    let img = render(Method::Adaptive(2), &s);
+    close(img.rgb[0], [0.75, 0.5, 0.25], 0.0);
+    // One node: (1, 0.5) and (2, 0.25); removing node 1 gives node 0 T = 0.25, so green
+    // (behind z 1) sees 0.25 instead of 0.5: red + 0.25 green + 0.25 white.
+    let img = render(Method::Adaptive(1), &s);
+    close(img.rgb[0], [0.75, 0.375, 0.25], 0.0);
+    assert_eq!(img.vis[0], 0.25);
+}
+
+#[test]
+fn adaptive_removes_the_smallest_area_variation() {
+    let mut v = Visibility::default();
+    v.insert(1.0, 0.5, 2); // (1, .5)
+    v.insert(2.0, 0.5, 2); // (1, .5) (2, .25)
+    v.insert(10.0, 0.5, 2); // areas: node 1: 1 * .25, node 2: 8 * .125 -> remove node 1
+    assert_eq!(v.nodes, vec![(1.0, 0.25), (10.0, 0.125)]);
+    assert_eq!(v.at(1.0), 1.0);
+    assert_eq!(v.at(5.0), 0.25);
+    assert_eq!(v.total(), 0.125);
+}
+
+/// A byte in unorm: `round(x * 255)`.
+fn q(x: f32) -> f32 {
+    (x * 255.0 + 0.5).floor()
+}
+
+/// `round(a * b / 255)` on bytes.
+fn mul8(a: f32, b: f32) -> f32 {
+    (a * b / 255.0 + 0.5).floor()
+}
+
+#[test]
+fn mlab_two_rows_three_fragments() {
+    // Submitted z 3 (blue), z 1 (red), z 2 (green), each alpha 0.5, premultiplied 0.5.
+    let s = pixel(&[(3.0, BLUE, 0.5), (1.0, RED, 0.5), (2.0, GREEN, 0.5)], WHITE);
+    let img = render(Method::Mlab(2), &s);
+    // Rows: red; then green merged with blue (Eq. 7-8 in unorm8).
+    let (c, t) = (q(0.5), 255.0 - q(0.5));
+    let row0 = ([c, 0.0, 0.0], t);
+    let row1 = ([0.0, c, mul8(c, t)], mul8(t, t));
+    let v1 = row0.1 / 255.0;
+    let want: [f32; 3] = std::array::from_fn(|k| row0.0[k] / 255.0 + row1.0[k] / 255.0 * v1 + v1 * (row1.1 / 255.0));
+    close(img.rgb[0], want, 1e-6);
+    assert!((img.vis[0] - v1 * row1.1 / 255.0).abs() < 1e-7);
+    // Four rows keep all three: exact up to the 8-bit quantization.
+    let img4 = render(Method::Mlab(4), &s);
+    let exact = render(Method::Reference, &s);
+    close(img4.rgb[0], exact.rgb[0], 2.0 / 255.0);
+}
+
+#[test]
+fn hybrid_one_head_row_and_tail() {
+    let s = pixel(&[(3.0, BLUE, 0.5), (1.0, RED, 0.5), (2.0, GREEN, 0.5)], WHITE);
+    let img = render(Method::Hybrid(1), &s);
+    // Head: red. Tail: color sums (0, 128, 128), alpha sum 256, count 2.
+    let (c, t) = (q(0.5), 255.0 - q(0.5));
+    let th = t / 255.0;
+    let s_a = 2.0 * (255.0 - t) / 255.0;
+    let t_tail = (1.0 - s_a / 2.0).powi(2);
+    let g = (1.0 - t_tail) / s_a;
+    let tail = [0.0, c / 255.0 * g, c / 255.0 * g];
+    let want: [f32; 3] = std::array::from_fn(|k| [c / 255.0, 0.0, 0.0][k] + th * tail[k] + th * t_tail);
+    close(img.rgb[0], want, 1e-5);
+    assert!((img.vis[0] - th * t_tail).abs() < 1e-6);
+}
+
+#[test]
+fn mlab_transmittance_stalls_in_8_bits() {
+    // 300 faint fragments (alpha 0.01) merged into one row: the unorm8 product
+    // round(x * 252 / 255) stops moving once x * 3 / 255 < 0.5.
+    let frags: Vec<_> = (0..300)
+        .map(|i| (1.0 + i as f32, [0.01, 0.01, 0.01], 0.01f32))
+        .collect();
+    let s = pixel(&frags, [0.0; 3]);
+    let img = render(Method::Mlab(1), &s);
+    let tf = 255.0 - q(0.01);
+    let mut x = 255.0;
+    for _ in 0..300 {
+        x = mul8(x, tf);
+    }
+    assert_eq!(x, 42.0);
+    assert_eq!(img.vis[0], x / 255.0);
+    let exact = render(Method::Reference, &s).vis[0];
+    assert!(
+        exact < 0.05 && img.vis[0] - exact > 0.1,
+        "exact {exact}, MLAB {}",
+        img.vis[0]
+    );
+}
+
+#[test]
+fn every_standard_method_renders_a_small_scene() {
+    let s = oit_lab::scenes::Scene::Glass.generate(32, 18, 7);
+    let f = Frame::new(&s);
+    for m in Method::standard_list() {
+        let img = m.render(&f).unwrap();
+        assert_eq!(img.rgb.len(), 32 * 18, "{}", m.name());
+        assert!(img.vis.iter().all(|v| (0.0..=1.0).contains(v)), "{}", m.name());
+    }
+    assert!(Method::Mlab(9).render(&f).is_err());
+    assert!(Method::Adaptive(0).render(&f).is_err());
+}
