@@ -59,14 +59,25 @@ pub fn defects(f: &RawFragment) -> (Defects, Expected) {
     let mut d = Defects::default();
     let a_in = f.a;
     d.add(FragmentError::NanAlpha, a_in.is_nan());
-    d.add(FragmentError::AlphaOutOfRange, !a_in.is_nan() && !(a_in >= 0.0 && a_in <= 1.0));
-    let alpha = if f.ctor == Ctor::WithTransmittance { 1.0 - a_in } else { a_in };
+    d.add(
+        FragmentError::AlphaOutOfRange,
+        !a_in.is_nan() && !(a_in >= 0.0 && a_in <= 1.0),
+    );
+    let alpha = if f.ctor == Ctor::WithTransmittance {
+        1.0 - a_in
+    } else {
+        a_in
+    };
     d.add(FragmentError::NanColor, f.color.iter().any(|c| c.is_nan()));
     d.add(FragmentError::InfiniteColor, f.color.iter().any(|c| c.is_infinite()));
     d.add(FragmentError::NegativeColor, f.color.iter().any(|&c| c < 0.0));
     d.add(FragmentError::NanDepth, f.z.is_nan());
     d.add(FragmentError::InfiniteDepth, f.z.is_infinite());
-    let color = if f.ctor == Ctor::Straight { f.color.map(|c| c * alpha) } else { f.color };
+    let color = if f.ctor == Ctor::Straight {
+        f.color.map(|c| c * alpha)
+    } else {
+        f.color
+    };
     d.add(FragmentError::ColorAboveOne, color.iter().any(|&c| c > 1.0));
     (d, Expected { color, alpha })
 }
@@ -101,7 +112,11 @@ impl RefMlab {
 
     /// Insert a row with a finite depth.
     pub fn insert(&mut self, row: Row) {
-        let pos = self.rows.iter().position(|b| row.depth() <= b.depth()).unwrap_or(self.rows.len());
+        let pos = self
+            .rows
+            .iter()
+            .position(|b| row.depth() <= b.depth())
+            .unwrap_or(self.rows.len());
         self.rows.insert(pos, row);
         if self.rows.len() > self.m {
             let back = self.rows.pop().unwrap();
@@ -152,7 +167,13 @@ pub fn ref_tail_fields(start: [u64; 5], rows: &[Row]) -> [u64; 5] {
         s[3] += u64::from(255 - t);
         s[4] += 1;
     }
-    [s[0].min(1023), s[1].min(1023), s[2].min(1023), s[3].min(65535), s[4].min(65535)]
+    [
+        s[0].min(1023),
+        s[1].min(1023),
+        s[2].min(1023),
+        s[3].min(65535),
+        s[4].min(65535),
+    ]
 }
 
 /// The 8 tail bytes for given fields and spare bits, packed here (not by the kernel).

@@ -63,7 +63,11 @@ fn mlab_stream_m<const M: usize>(input: &mut Input) {
         visibility *= 1.0 - f64::from(f.alpha());
         let n = accepted.len();
         let rows = array.rows();
-        assert_eq!(rows.as_slice(), reference.rows().as_slice(), "M = {M}: differs from reference Listing 1 after {accepted:?}");
+        assert_eq!(
+            rows.as_slice(),
+            reference.rows().as_slice(),
+            "M = {M}: differs from reference Listing 1 after {accepted:?}"
+        );
         check_invariants(rows, &accepted);
         let filled = rows.iter().filter(|r| !r.is_empty()).count();
         assert_eq!(filled, n.min(M), "M = {M}: {rows:?} after {n} fragments");
@@ -71,7 +75,10 @@ fn mlab_stream_m<const M: usize>(input: &mut Input) {
         check_resolved(r, M as f32, &accepted);
         // Each quantization and each merge moves the product by at most 0.5 / 255.
         let err = (f64::from(r.transmittance) - visibility).abs();
-        assert!(err <= n as f64 / 255.0 + 1e-5, "M = {M}: visibility {r:?} vs exact {visibility} after {accepted:?}");
+        assert!(
+            err <= n as f64 / 255.0 + 1e-5,
+            "M = {M}: visibility {r:?} vs exact {visibility} after {accepted:?}"
+        );
     }
     let n = accepted.len();
     if n <= M && occluding(&accepted) {
@@ -112,8 +119,17 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
         frags.push(f);
         rows.push(f.row());
         let (head, tail) = ref_hybrid(K, &rows);
-        assert_eq!(ht.head().as_slice(), head.as_slice(), "K = {K}: head differs from the reference after {rows:?}");
-        assert_eq!(ht.tail().to_bytes(), tail, "K = {K}: tail {:?} differs from the reference after {rows:?}", ht.tail());
+        assert_eq!(
+            ht.head().as_slice(),
+            head.as_slice(),
+            "K = {K}: head differs from the reference after {rows:?}"
+        );
+        assert_eq!(
+            ht.tail().to_bytes(),
+            tail,
+            "K = {K}: tail {:?} differs from the reference after {rows:?}",
+            ht.tail()
+        );
         check_invariants(ht.head(), &rows);
         check_resolved(ht.resolve(), K as f32 + TAIL_COLOR_MAX, &rows);
     }
@@ -143,10 +159,16 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
         for &i in &order {
             other.insert(&frags[i]);
         }
-        assert_eq!(other, ht, "K = {K}: HT depends on submission order {order:?} of {rows:?}");
+        assert_eq!(
+            other, ht,
+            "K = {K}: HT depends on submission order {order:?} of {rows:?}"
+        );
         let (a, b) = (other.resolve(), ht.resolve());
         assert_eq!(a.transmittance.to_bits(), b.transmittance.to_bits());
-        assert_eq!(a.color.to_array().map(f32::to_bits), b.color.to_array().map(f32::to_bits));
+        assert_eq!(
+            a.color.to_array().map(f32::to_bits),
+            b.color.to_array().map(f32::to_bits)
+        );
     }
 }
 
@@ -160,7 +182,10 @@ fn row_or(input: &mut Input, fill: Row) -> Row {
 
 /// Layout of any 8 bytes as a row and as a tail, checked against the documented tables.
 pub fn check_layout(b: [u8; 8]) {
-    let w = [u32::from_le_bytes([b[0], b[1], b[2], b[3]]), u32::from_le_bytes([b[4], b[5], b[6], b[7]])];
+    let w = [
+        u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        u32::from_le_bytes([b[4], b[5], b[6], b[7]]),
+    ];
     let row = Row::from_bytes(b);
     assert_eq!(row.to_bytes(), b);
     assert_eq!(row.words(), w);
@@ -175,7 +200,10 @@ pub fn check_layout(b: [u8; 8]) {
     assert_eq!(tail.to_bytes(), b);
     assert_eq!(tail.words(), w);
     assert_eq!(Tail::from_words(w), tail);
-    assert_eq!(tail.color_sum(), [w[0] & 1023, (w[0] >> 10) & 1023, (w[0] >> 20) & 1023]);
+    assert_eq!(
+        tail.color_sum(),
+        [w[0] & 1023, (w[0] >> 10) & 1023, (w[0] >> 20) & 1023]
+    );
     assert_eq!(tail.alpha_sum(), w[1] & 0xffff);
     assert_eq!(tail.count(), w[1] >> 16);
     assert_eq!(tail.spare(), w[0] >> 30);
@@ -214,7 +242,11 @@ fn garbage_mlab<const M: usize>(input: &mut Input) {
     let rows: [Row; M] = core::array::from_fn(|_| row_or(input, Row::EMPTY));
     let new = row_or(input, Row::EMPTY);
     let context = (&rows, new);
-    assert_eq!(mlab_mod::merge(rows[0], new), ref_merge(rows[0], new), "merge of {context:?}");
+    assert_eq!(
+        mlab_mod::merge(rows[0], new),
+        ref_merge(rows[0], new),
+        "merge of {context:?}"
+    );
 
     // Resolve of any rows: finite, in range, and Eq. 5 evaluated in f64.
     let r = resolve_rows(&rows);
@@ -252,9 +284,15 @@ fn garbage_hybrid<const K: usize>(input: &mut Input) {
     let c = t.color.to_array();
     for i in 0..3 {
         let err = (f64::from(c[i]) - c_ref[i]).abs();
-        assert!(err <= 1e-3 * c_ref[i].max(1.0), "tail color {i}: {t:?} vs {c_ref:?} from {tail:?}");
+        assert!(
+            err <= 1e-3 * c_ref[i].max(1.0),
+            "tail color {i}: {t:?} vs {c_ref:?} from {tail:?}"
+        );
     }
-    assert!((f64::from(t.transmittance) - t_ref).abs() <= 1e-3, "tail T: {t:?} vs {t_ref} from {tail:?}");
+    assert!(
+        (f64::from(t.transmittance) - t_ref).abs() <= 1e-3,
+        "tail T: {t:?} vs {t_ref} from {tail:?}"
+    );
 
     let r = hybrid::resolve(&head, tail);
     check_resolved(r, K as f32 + TAIL_COLOR_MAX, &context);
@@ -267,8 +305,16 @@ fn garbage_hybrid<const K: usize>(input: &mut Input) {
     let (mut h, mut t) = (head, tail);
     hybrid::insert(&mut h, &mut t, new);
     // LANES: the same insert on a lanes HT pixel; assert_eq! head and tail bytes.
-    assert_eq!(h.as_slice(), expected_head.as_slice(), "HT insert {new:?} into {head:?}");
-    assert_eq!(t.to_bytes(), expected_tail, "HT tail after {new:?} into {tail:?}: {t:?}");
+    assert_eq!(
+        h.as_slice(),
+        expected_head.as_slice(),
+        "HT insert {new:?} into {head:?}"
+    );
+    assert_eq!(
+        t.to_bytes(),
+        expected_tail,
+        "HT tail after {new:?} into {tail:?}: {t:?}"
+    );
     let new_ok = new.is_empty() || new.depth() < f32::INFINITY;
     if invariants_hold(&head) && new_ok {
         check_invariants(&h, &context);
@@ -279,15 +325,26 @@ fn garbage_hybrid<const K: usize>(input: &mut Input) {
 /// The pixel writers on a resolved value and a background read from the input (any bits:
 /// backgrounds are not validated; NaN gives byte 0 and a NaN half).
 fn check_pixels(r: Resolved, input: &mut Input, context: &dyn core::fmt::Debug) {
-    let bg = Vec3::new(input.unit().unwrap_or(0.0), input.unit().unwrap_or(0.5), input.unit().unwrap_or(1.0));
+    let bg = Vec3::new(
+        input.unit().unwrap_or(0.0),
+        input.unit().unwrap_or(0.5),
+        input.unit().unwrap_or(1.0),
+    );
     for background in [Background::Opaque(bg), Background::Transparent] {
         let p = r.pixel(background);
         let bytes = to_rgba8(p);
         let halves = to_rgba16f(p);
         for i in 0..4 {
             let x = p.to_array()[i];
-            let want = if x.is_nan() { 0 } else { (f64::from(x.clamp(0.0, 1.0)) * 255.0 + 0.5).floor() as u8 };
-            assert!(bytes[i].abs_diff(want) <= 1, "rgba8 of {p:?} = {bytes:?} from {context:?}");
+            let want = if x.is_nan() {
+                0
+            } else {
+                (f64::from(x.clamp(0.0, 1.0)) * 255.0 + 0.5).floor() as u8
+            };
+            assert!(
+                bytes[i].abs_diff(want) <= 1,
+                "rgba8 of {p:?} = {bytes:?} from {context:?}"
+            );
             assert_eq!(halves[i].to_bits(), f16::from_f32(x).to_bits());
         }
         if let Background::Transparent = background {
@@ -482,14 +539,23 @@ fn spans<L: Layout>(input: &mut Input) {
         *slot = if fill & 1 == 0 {
             Row::EMPTY
         } else {
-            input.array::<8>().map(Row::from_bytes).unwrap_or(Row::new([fill, i as u8, 0], fill, i as f32))
+            input
+                .array::<8>()
+                .map(Row::from_bytes)
+                .unwrap_or(Row::new([fill, i as u8, 0], fill, i as f32))
         };
     }
     let snapshot = buf.clone();
     match L::view(&mut buf[GUARD..GUARD + len], w, h).map(|v| L::bytes(&v).to_vec()) {
         Err(e) => {
             assert_ne!(len, needed, "{w}x{h}: storage of the right length refused: {e:?}");
-            assert_eq!(e, FramebufferError::StorageLength { expected: needed, actual: len });
+            assert_eq!(
+                e,
+                FramebufferError::StorageLength {
+                    expected: needed,
+                    actual: len
+                }
+            );
             assert_eq!(buf, snapshot, "a refused view changed the storage");
             return;
         }
@@ -525,7 +591,15 @@ fn spans<L: Layout>(input: &mut Input) {
                         let p = pixel(x, y);
                         L::ref_insert(&mut expected[p..p + L::SLOTS], f.row());
                     } else {
-                        assert_eq!(got, Err(FramebufferError::OutOfBounds { x, y, width: w, height: h }));
+                        assert_eq!(
+                            got,
+                            Err(FramebufferError::OutOfBounds {
+                                x,
+                                y,
+                                width: w,
+                                height: h
+                            })
+                        );
                     }
                 }
                 // LANES: run the same span (x0, y, n, mask) through the lanes kernel on a copy
@@ -533,19 +607,31 @@ fn spans<L: Layout>(input: &mut Input) {
             }
             // Resolve every pixel into an output of the right length, or one off.
             2 => {
-                let (Some(which), Some(off), Some(b)) = (input.u8(), input.u8(), input.u8()) else { break };
+                let (Some(which), Some(off), Some(b)) = (input.u8(), input.u8(), input.u8()) else {
+                    break;
+                };
                 let pixels = (w * h) as usize;
                 let n = match off % 8 {
                     6 => pixels - 1,
                     7 => pixels + 1,
                     _ => pixels,
                 };
-                let bg = if b == 255 { Background::Transparent } else { Background::Opaque(Vec3::splat(f32::from(b) / 254.0)) };
+                let bg = if b == 255 {
+                    Background::Transparent
+                } else {
+                    Background::Opaque(Vec3::splat(f32::from(b) / 254.0))
+                };
                 let sentinel = Vec4::new(7.0, 7.0, 7.0, 7.0);
                 let mut out = vec![sentinel; n];
                 let got = L::resolve_all(&v, which, &mut out, bg);
                 if n != pixels {
-                    assert_eq!(got, Err(FramebufferError::OutputLength { expected: pixels, actual: n }));
+                    assert_eq!(
+                        got,
+                        Err(FramebufferError::OutputLength {
+                            expected: pixels,
+                            actual: n
+                        })
+                    );
                     assert!(out.iter().all(|&p| p == sentinel), "a refused resolve wrote its output");
                 } else {
                     assert_eq!(got, Ok(()));
@@ -566,10 +652,20 @@ fn spans<L: Layout>(input: &mut Input) {
                         }
                     }
                 }
-                let (Some(x), Some(y)) = (input.u8(), input.u8()) else { break };
+                let (Some(x), Some(y)) = (input.u8(), input.u8()) else {
+                    break;
+                };
                 let (x, y) = (u32::from(x), u32::from(y) % (h + 2));
                 if x >= w || y >= h {
-                    assert_eq!(L::resolve(&v, x, y), Err(FramebufferError::OutOfBounds { x, y, width: w, height: h }));
+                    assert_eq!(
+                        L::resolve(&v, x, y),
+                        Err(FramebufferError::OutOfBounds {
+                            x,
+                            y,
+                            width: w,
+                            height: h
+                        })
+                    );
                 }
             }
             _ => {
@@ -582,7 +678,14 @@ fn spans<L: Layout>(input: &mut Input) {
         }
         drop(v);
         assert_eq!(buf[..GUARD], before[..GUARD], "guard rows before the storage changed");
-        assert_eq!(buf[GUARD + len..], before[GUARD + len..], "guard rows after the storage changed");
-        assert_eq!(buf, expected, "{w}x{h}: pixels differ from the per-pixel reference after op {op}");
+        assert_eq!(
+            buf[GUARD + len..],
+            before[GUARD + len..],
+            "guard rows after the storage changed"
+        );
+        assert_eq!(
+            buf, expected,
+            "{w}x{h}: pixels differ from the per-pixel reference after op {op}"
+        );
     }
 }
