@@ -30,7 +30,8 @@
 //! [`Hybrid`] do not depend on submission order.
 
 use crate::fragment::Fragment;
-use crate::resolve::{INV255, Resolved, resolve_rows};
+use crate::lanes::{FloatLanes, RowLanes};
+use crate::resolve::{INV255, Resolved};
 use crate::row::Row;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
@@ -163,41 +164,76 @@ impl Tail {
     ///
     /// Any tail bytes give a finite result: color channels in `[0, 1023/255]`,
     /// transmittance in `[0, 1]` (a mean alpha above 1, possible only in arbitrary bytes,
-    /// is clamped to 1; a zero count with non-zero sums resolves as if the count were 1).
+    /// is clamped to 1; a zero count resolves as if the count were 1).
     #[inline]
     pub fn resolve(self) -> Resolved {
-        let [cr, cg, cb] = self.color_sum();
-        let n = self.count();
-        let sum_a = self.alpha_sum();
-        if n == 0 && sum_a == 0 && cr == 0 && cg == 0 && cb == 0 {
-            return Resolved::CLEAR;
-        }
-        let n = n.max(1);
-        let s_a = sum_a as f32 * INV255;
-        let mean = (s_a / n as f32).min(1.0);
-        let t_tail = powi(1.0 - mean, n);
-        let g = if sum_a == 0 { 1.0 } else { (1.0 - t_tail) / s_a };
-        let sum_c = Vec3::new(cr as f32, cg as f32, cb as f32) * INV255;
+        let (color, t) = tail_lanes::<f32>(self.color_sum(), self.alpha_sum(), self.count());
         Resolved {
-            color: sum_c * g,
-            transmittance: t_tail,
+            color: Vec3::from_array(color),
+            transmittance: t,
         }
     }
 }
 
-/// `x^n` by binary exponentiation over the 16 bits of `n` (`n <= 65535`), in a fixed
-/// sequence of f32 multiplies that the lane kernel repeats (`core` has no `powi`).
+/// The tail resolve, written once for every lane width (`f32` or `f32x8`): color and
+/// transmittance of the tail from its sums. Multiplies and adds are separate (no FMA).
+#[inline(always)]
+pub(crate) fn tail_lanes<F: FloatLanes>(sums: [F::U; 3], alpha: F::U, count: F::U) -> ([F; 3], F) {
+    let inv = F::splat(INV255);
+    let one = F::splat(1.0);
+    let empty = F::is_zero(count);
+    let s_a = F::from_u(alpha) * inv;
+    let n = F::select(empty, one, F::from_u(count));
+    let mean = s_a.div(n);
+    let mean = F::select(mean.gt(one), one, mean);
+    let x = one - mean;
+    // x^count by binary exponentiation over the 16 bits of the count.
+    let mut power = one;
+    let mut base = x;
+    for bit in 0..16 {
+        power = F::select(F::bit(count, bit), power * base, power);
+        base = base * base;
+    }
+    let t_tail = F::select(empty, x, power);
+    // (1 - T_tail) / S_a, whose limit is 1 as S_a -> 0 (pure additive light).
+    let g = F::select(F::is_zero(alpha), one, (one - t_tail).div(s_a));
+    let [r, gr, b] = sums;
+    (
+        [F::from_u(r) * inv * g, F::from_u(gr) * inv * g, F::from_u(b) * inv * g],
+        t_tail,
+    )
+}
+
+/// Head then tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`.
+#[inline(always)]
+pub(crate) fn combine_lanes<F: FloatLanes>(head: ([F; 3], F), tail: ([F; 3], F)) -> ([F; 3], F) {
+    let ([hr, hg, hb], ht) = head;
+    let ([tr, tg, tb], tt) = tail;
+    ([hr + tr * ht, hg + tg * ht, hb + tb * ht], ht * tt)
+}
+
+/// Resolved head and tail fields to a resolved pixel, for every lane width.
+#[inline(always)]
+pub(crate) fn resolve_lanes<F: FloatLanes>(
+    head: ([F; 3], F),
+    sums: [F::U; 3],
+    alpha: F::U,
+    count: F::U,
+) -> ([F; 3], F) {
+    combine_lanes(head, tail_lanes::<F>(sums, alpha, count))
+}
+
+/// `x^n` by binary exponentiation over the 16 bits of `n` (`n <= 65535`), the same
+/// sequence of f32 multiplies as the tail resolve (`core` has no `powi`).
 #[inline]
 pub fn powi(x: f32, n: u32) -> f32 {
     let mut result = 1.0f32;
     let mut base = x;
-    let mut e = n;
-    for _ in 0..16 {
-        if e & 1 != 0 {
+    for bit in 0..16 {
+        if (n >> bit) & 1 != 0 {
             result *= base;
         }
         base *= base;
-        e >>= 1;
     }
     result
 }
@@ -219,24 +255,33 @@ impl core::fmt::Debug for Tail {
 /// pushed out into the tail. `K = 0` is allowed (every fragment goes to the tail).
 #[inline]
 pub fn insert<const K: usize>(head: &mut [Row; K], tail: &mut Tail, row: Row) {
-    let mut f = row;
-    for slot in head.iter_mut() {
-        if f.depth() <= slot.depth() {
-            core::mem::swap(slot, &mut f);
-        }
+    insert_lanes(head, tail, row, true);
+}
+
+/// Listing 2, written once for every lane width; lanes where `on` is false are untouched.
+#[inline(always)]
+pub(crate) fn insert_lanes<L: RowLanes, const K: usize>(b: &mut [L; K], tail: &mut L::Tail, fragment: L, on: L::Mask) {
+    let mut f = fragment;
+    // 1-pass bubble sort to insert fragment
+    for slot in b.iter_mut() {
+        let swap = f.depth_le(*slot) & on;
+        let front = L::select(swap, f, *slot);
+        f = L::select(swap, *slot, f);
+        *slot = front;
     }
-    tail.add(f);
+    // Update tail if the row pushed out carries color or opacity.
+    *tail = L::select_tail(on, L::tail_add(*tail, f), *tail);
 }
 
 /// Resolve head and tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`, where
 /// the head is Eq. 5 over its rows and the tail is [`Tail::resolve`].
 #[inline]
 pub fn resolve(head: &[Row], tail: Tail) -> Resolved {
-    let h = resolve_rows(head);
-    let t = tail.resolve();
+    let h = crate::resolve::resolve_layers(head.iter().map(crate::resolve::row_bytes));
+    let ([r, g, b], t) = resolve_lanes::<f32>(h, tail.color_sum(), tail.alpha_sum(), tail.count());
     Resolved {
-        color: h.color + t.color * h.transmittance,
-        transmittance: h.transmittance * t.transmittance,
+        color: Vec3::new(r, g, b),
+        transmittance: t,
     }
 }
 

@@ -42,6 +42,7 @@
 pub mod fragment;
 pub mod framebuffer;
 pub mod hybrid;
+pub mod lanes;
 pub mod mlab;
 pub mod resolve;
 pub mod row;

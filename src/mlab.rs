@@ -22,6 +22,7 @@
 //! [`Row::EMPTY`] and only at the back.
 
 use crate::fragment::Fragment;
+use crate::lanes::RowLanes;
 use crate::resolve::{Resolved, resolve_rows};
 use crate::row::Row;
 use crate::unorm::mul;
@@ -70,16 +71,26 @@ pub fn merge(front: Row, back: Row) -> Row {
 /// before.
 #[inline]
 pub fn insert<const M: usize>(rows: &mut [Row; M], row: Row) {
+    insert_lanes(rows, row, true);
+}
+
+/// Listing 1, written once for every lane width (a [`Row`] is one lane; see
+/// [`crate::lanes`]): lanes where `on` is false are left untouched. The swap of the listing
+/// is two selects on the same condition, so this is the listing step for step, for any rows.
+#[inline(always)]
+pub(crate) fn insert_lanes<L: RowLanes, const M: usize>(b: &mut [L; M], fragment: L, on: L::Mask) {
     let () = AtLeastOne::<M>::OK;
-    let mut f = row;
-    for slot in rows.iter_mut() {
-        if f.depth() <= slot.depth() {
-            core::mem::swap(slot, &mut f);
-        }
+    let mut f = fragment;
+    // 1-pass bubble sort to insert fragment
+    for slot in b.iter_mut() {
+        let swap = f.depth_le(*slot) & on; // if (f.z <= B[i].z)
+        let front = L::select(swap, f, *slot); // B[i] = f
+        f = L::select(swap, *slot, f); // f = temp
+        *slot = front;
     }
-    // `f` is the row pushed out of the array (B[m] in the listing).
-    if let Some(last) = rows.last_mut() {
-        *last = merge(*last, f);
+    // Compression (merge last two rows): `f` is the row pushed out, B[m] in the listing.
+    if let Some(last) = b.last_mut() {
+        *last = L::select(on, L::merge(*last, f), *last);
     }
 }
 

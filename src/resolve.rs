@@ -12,6 +12,7 @@
 use glam::{Vec3, Vec4};
 use half::f16;
 
+use crate::lanes::FloatLanes;
 use crate::row::Row;
 
 /// `1 / 255` rounded to f32; `255.0 * INV255 == 1.0` exactly (tested).
@@ -75,24 +76,55 @@ pub enum Background {
 /// color channels in `[0, rows.len()]`, transmittance in `[0, 1]`).
 #[inline]
 pub fn resolve_rows(rows: &[Row]) -> Resolved {
-    let mut a = Vec3::ZERO;
-    let mut v = 1.0f32;
-    for row in rows {
-        let [r, g, b, t] = row.rgbt();
-        a += Vec3::new(unorm(r), unorm(g), unorm(b)) * v;
-        v *= unorm(t);
-    }
+    let ([r, g, b], t) = resolve_layers(rows.iter().map(row_bytes));
     Resolved {
-        color: a,
-        transmittance: v,
+        color: Vec3::new(r, g, b),
+        transmittance: t,
     }
+}
+
+/// A row's `[R, G, B, T]` bytes as exact f32.
+#[inline(always)]
+pub(crate) fn row_bytes(row: &Row) -> [f32; 4] {
+    row.rgbt().map(|b| b as f32)
+}
+
+/// Eq. 5, written once for every lane width (`f32` or `f32x8`), over layers given as byte
+/// values `[R, G, B, T]` front to back: per layer `a += (byte * INV255) * v`, then
+/// `v *= T * INV255`.
+#[inline(always)]
+pub(crate) fn resolve_layers<F: FloatLanes>(layers: impl Iterator<Item = [F; 4]>) -> ([F; 3], F) {
+    let inv = F::splat(INV255);
+    let mut a = [F::splat(0.0); 3];
+    let mut v = F::splat(1.0);
+    for [r, g, b, t] in layers {
+        a = [a[0] + r * inv * v, a[1] + g * inv * v, a[2] + b * inv * v];
+        v = v * (t * inv);
+    }
+    (a, v)
 }
 
 /// RGBA8 from a pixel: each channel clamped to `[0, 1]`, then `floor(x * 255 + 0.5)`
 /// (NaN becomes 0). Byte order R, G, B, A.
 #[inline]
 pub fn to_rgba8(pixel: Vec4) -> [u8; 4] {
-    pixel.to_array().map(|x| crate::unorm::quantize(x.clamp(0.0, 1.0)))
+    pixel.to_array().map(|x| {
+        // The same steps as the lanes writer: select-based clamp (NaN fails both tests).
+        let x = if x > 1.0 { 1.0 } else { x };
+        let x = if x >= 0.0 { x } else { 0.0 };
+        crate::unorm::quantize(x)
+    })
+}
+
+/// [`to_rgba8`] for 8 lanes, one channel: the byte in the low 8 bits of each lane.
+#[cfg(target_endian = "little")]
+#[inline(always)]
+pub(crate) fn to_unorm8_lanes(x: wide::f32x8) -> wide::u32x8 {
+    let one = wide::f32x8::ONE;
+    let x = x.simd_gt(one).select(one, x);
+    let x = x.simd_ge(wide::f32x8::ZERO).select(x, wide::f32x8::ZERO);
+    let q = x * wide::f32x8::splat(255.0) + wide::f32x8::splat(0.5);
+    bytemuck::cast::<wide::i32x8, wide::u32x8>(q.fast_trunc_int()) & wide::u32x8::splat(0xff)
 }
 
 /// RGBA16F (IEEE half) from a pixel, rounded to nearest even; values above 1 (additive

@@ -1,0 +1,631 @@
+//! Lanes: eight pixels at a time, bit-exact with the scalar kernel.
+//!
+//! A software rasterizer shades a primitive a span of pixels at a time; these functions take
+//! one fragment per lane for eight pixels (each lane its own pixel and its own blending
+//! array), with a coverage mask (`u8`, bit `i` = lane `i`; lanes that are off are untouched).
+//!
+//! # Arrangement: layer-major spans
+//!
+//! The rows stay the packed 8-byte [`Row`]. A span of 8 pixels with `M` rows each is stored
+//! layer-major, `[[Row; 8]; M]`: layer `j` of the 8 pixels is 64 contiguous bytes (one cache
+//! line when the span is 64-byte aligned), and each SIMD register holds four whole rows in
+//! its four 64-bit lanes. Nothing is deinterleaved to insert: the depth test is an f32
+//! compare whose result in the odd (depth) dword is widened to the whole 64-bit lane, and the
+//! swap of Listing 1 is two selects of whole rows. [`to_pixel_major`] and [`from_pixel_major`]
+//! convert losslessly to and from the per-pixel `[Row; M]` arrangement of
+//! [`MlabFramebuffer`](crate::MlabFramebuffer); `docs/performance.md` measures the two.
+//!
+//! # One algorithm, two widths
+//!
+//! Listing 1 and 2 are written once ([`crate::mlab`], [`crate::hybrid`]) over the private
+//! `RowLanes` trait, implemented by [`Row`] (one pixel, the scalar kernel) and by an
+//! eight-row register pair here. The resolve (Eq. 5-6, the HT tail) is written once over the
+//! `FloatLanes` trait, implemented by `f32` and `wide::f32x8`: scalar and lanes evaluate the
+//! same f32 expression tree in the same order, multiply then add, never FMA. The merge and
+//! the tail are exact integer arithmetic; here they use SWAR on 16-bit slots (`pmullw`), the
+//! scalar path per-channel bytes; both compute `round(a * b / 255)` exactly.
+//!
+//! `wide` picks AVX2 or SSE2 at compile time ([`BACKEND`] says which). Every operation used
+//! here is a native instruction on both (no `u32` multiply or `u32` min, which `wide` emulates
+//! lane by lane without SSE4.1).
+//!
+//! ```
+//! use mlab::lanes::{self, FragmentLanes};
+//! use mlab::Row;
+//! let mut span = [[Row::EMPTY; 8]; 4]; // 8 pixels, M = 4, layer-major
+//! let frags = FragmentLanes {
+//!     color: [[0.5; 8], [0.0; 8], [0.0; 8]],
+//!     alpha: [0.5; 8],
+//!     depth: [1.0, 2.0, 3.0, f32::NAN, 5.0, 6.0, 7.0, 8.0],
+//! };
+//! let invalid = lanes::mlab_insert_fragments(&mut span, &frags, 0b0111_1111);
+//! assert_eq!(invalid, 0b0000_1000); // lane 3 has a NaN depth: untouched, reported
+//! assert_eq!(span[0][7], Row::EMPTY); // lane 7 was off
+//! assert_eq!(span[0][0], Row::new([128, 0, 0], 127, 1.0));
+//! ```
+
+use crate::hybrid::Tail;
+use crate::resolve::{Background, Resolved};
+use crate::row::Row;
+use bytemuck::cast;
+use glam::Vec4;
+use wide::{f32x8, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
+
+/// Pixels per lane group.
+pub const LANES: usize = 8;
+
+/// The SIMD instruction set `wide` compiled the lanes for.
+pub const BACKEND: &str = if cfg!(target_feature = "avx2") {
+    "avx2"
+} else if cfg!(target_feature = "sse2") {
+    "sse2"
+} else {
+    "portable"
+};
+
+// ---------------------------------------------------------------------------------------
+// The lane abstractions shared with the scalar kernel.
+// ---------------------------------------------------------------------------------------
+
+/// Rows of one or more pixels, one pixel per lane: what Listings 1 and 2 are written over.
+pub(crate) trait RowLanes: Copy {
+    /// Per-lane condition.
+    type Mask: Copy + core::ops::BitAnd<Output = Self::Mask>;
+    /// Per-lane HT tail.
+    type Tail: Copy;
+    /// `self.z <= other.z` in IEEE f32 (false when either is NaN).
+    fn depth_le(self, other: Self) -> Self::Mask;
+    /// `if mask { a } else { b }` per lane.
+    fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
+    /// Eq. 7-8 per lane ([`crate::mlab::merge`]).
+    fn merge(front: Self, back: Self) -> Self;
+    /// [`Tail::add`] per lane.
+    fn tail_add(tail: Self::Tail, row: Self) -> Self::Tail;
+    /// `if mask { a } else { b }` per lane, for tails.
+    fn select_tail(mask: Self::Mask, a: Self::Tail, b: Self::Tail) -> Self::Tail;
+}
+
+impl RowLanes for Row {
+    type Mask = bool;
+    type Tail = Tail;
+    #[inline(always)]
+    fn depth_le(self, other: Self) -> bool {
+        self.depth() <= other.depth()
+    }
+    #[inline(always)]
+    fn select(mask: bool, a: Self, b: Self) -> Self {
+        if mask { a } else { b }
+    }
+    #[inline(always)]
+    fn merge(front: Self, back: Self) -> Self {
+        crate::mlab::merge(front, back)
+    }
+    #[inline(always)]
+    fn tail_add(tail: Tail, row: Self) -> Tail {
+        let mut t = tail;
+        t.add(row);
+        t
+    }
+    #[inline(always)]
+    fn select_tail(mask: bool, a: Tail, b: Tail) -> Tail {
+        if mask { a } else { b }
+    }
+}
+
+/// f32 values of one or more pixels: what the resolve is written over.
+pub(crate) trait FloatLanes:
+    Copy + core::ops::Add<Output = Self> + core::ops::Sub<Output = Self> + core::ops::Mul<Output = Self>
+{
+    /// Per-lane unsigned integer (tail fields).
+    type U: Copy;
+    /// Per-lane condition.
+    type Mask: Copy;
+    /// All lanes `v`.
+    fn splat(v: f32) -> Self;
+    /// `if mask { a } else { b }`.
+    fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
+    /// Bit `bit` of `n` is set.
+    fn bit(n: Self::U, bit: u32) -> Self::Mask;
+    /// `n == 0`.
+    fn is_zero(n: Self::U) -> Self::Mask;
+    /// `self > other`.
+    fn gt(self, other: Self) -> Self::Mask;
+    /// `self / other` (IEEE, correctly rounded in both widths).
+    fn div(self, other: Self) -> Self;
+    /// Exact conversion of a small integer (below 2^24).
+    fn from_u(n: Self::U) -> Self;
+}
+
+impl FloatLanes for f32 {
+    type U = u32;
+    type Mask = bool;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn select(mask: bool, a: Self, b: Self) -> Self {
+        if mask { a } else { b }
+    }
+    #[inline(always)]
+    fn bit(n: u32, bit: u32) -> bool {
+        (n >> bit) & 1 != 0
+    }
+    #[inline(always)]
+    fn is_zero(n: u32) -> bool {
+        n == 0
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> bool {
+        self > other
+    }
+    #[inline(always)]
+    fn div(self, other: Self) -> Self {
+        self / other
+    }
+    #[inline(always)]
+    fn from_u(n: u32) -> Self {
+        n as f32
+    }
+}
+
+impl FloatLanes for f32x8 {
+    type U = u32x8;
+    type Mask = f32x8;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        f32x8::splat(v)
+    }
+    #[inline(always)]
+    fn select(mask: f32x8, a: Self, b: Self) -> Self {
+        mask.select(a, b)
+    }
+    #[inline(always)]
+    fn bit(n: u32x8, bit: u32) -> f32x8 {
+        let one = u32x8::splat(1 << bit);
+        cast((n & one).simd_eq(one))
+    }
+    #[inline(always)]
+    fn is_zero(n: u32x8) -> f32x8 {
+        cast(n.simd_eq(u32x8::ZERO))
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> f32x8 {
+        self.simd_gt(other)
+    }
+    #[inline(always)]
+    fn div(self, other: Self) -> Self {
+        self / other
+    }
+    #[inline(always)]
+    fn from_u(n: u32x8) -> Self {
+        cast::<u32x8, i32x8>(n).round_float()
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Eight rows in two registers.
+// ---------------------------------------------------------------------------------------
+
+/// Low dword of every 64-bit lane (a row's color and transmittance; a tail's color sums).
+const LO: u32x8 = u32x8::new([!0, 0, !0, 0, !0, 0, !0, 0]);
+/// High dword of every 64-bit lane (a row's depth; a tail's alpha sum and count).
+const HI: u32x8 = u32x8::new([0, !0, 0, !0, 0, !0, 0, !0]);
+const BYTES02: u32x8 = u32x8::splat(0x00ff_00ff);
+
+/// Eight rows (or eight tails), one per lane: lanes 0-3 in `a`, 4-7 in `b`, each 64-bit
+/// lane one whole row (`word0` in the low dword, `word1` in the high dword).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rows8 {
+    a: u32x8,
+    b: u32x8,
+}
+
+/// Per-lane mask for [`Rows8`]: all ones or all zeros over each 64-bit lane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Mask8 {
+    a: u32x8,
+    b: u32x8,
+}
+
+impl core::ops::BitAnd for Mask8 {
+    type Output = Mask8;
+    #[inline(always)]
+    fn bitand(self, rhs: Mask8) -> Mask8 {
+        Mask8 {
+            a: self.a & rhs.a,
+            b: self.b & rhs.b,
+        }
+    }
+}
+
+impl Mask8 {
+    /// From a bitmask (bit `i` = lane `i`).
+    #[inline(always)]
+    fn from_bits(bits: u8) -> Mask8 {
+        let v = u32x8::splat(bits as u32);
+        let sa = u32x8::new([1, 1, 2, 2, 4, 4, 8, 8]);
+        let sb = u32x8::new([16, 16, 32, 32, 64, 64, 128, 128]);
+        Mask8 {
+            a: (v & sa).simd_eq(sa),
+            b: (v & sb).simd_eq(sb),
+        }
+    }
+}
+
+/// Copy the mask in the high dword of each 64-bit lane to the whole lane.
+#[inline(always)]
+fn widen_hi(m: u32x8) -> u32x8 {
+    let h = m & HI;
+    h | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(h) >> 32)
+}
+
+/// Copy the mask in the low dword of each 64-bit lane to the whole lane.
+#[inline(always)]
+fn widen_lo(m: u32x8) -> u32x8 {
+    let l = m & LO;
+    l | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(l) << 32)
+}
+
+/// `round(x / 255)` in each 16-bit slot holding `x <= 65025` (slots at bits 0 and 16 of each dword).
+#[inline(always)]
+fn div255_slots(x: u32x8) -> u32x8 {
+    let y = x + u32x8::splat(0x0080_0080);
+    let y = y + ((y >> 8) & BYTES02);
+    (y >> 8) & BYTES02
+}
+
+/// Merge (Eq. 7-8) for four rows in one register: SWAR over 16-bit slots.
+#[inline(always)]
+fn merge4(front: u32x8, back: u32x8) -> u32x8 {
+    // T_front in both 16-bit slots of the low dword (the high dword is don't-care).
+    let t = (front >> 24) & u32x8::splat(0xff);
+    let t2: u16x16 = cast(t | (t << 16));
+    // Bytes 0 and 2 (R, B) and bytes 1 and 3 (G, T) of the back row, one per 16-bit slot.
+    let even: u16x16 = cast(back & BYTES02);
+    let odd: u16x16 = cast((back >> 8) & BYTES02);
+    let pe = div255_slots(cast(even * t2)); // each slot <= 255 * 255: no carry
+    let po = div255_slots(cast(odd * t2));
+    let product = pe | (po << 8); // round(back.rgbt * T_front / 255), bytewise
+    // A_front + product, saturating; the front's T byte is replaced by the product's T.
+    let a_front = front & u32x8::splat(0x00ff_ffff);
+    let sum: u32x8 = cast(cast::<u32x8, u8x32>(a_front).saturating_add(cast(product)));
+    (sum & LO) | (front & HI)
+}
+
+/// [`Tail::add`] for four tails in one register.
+#[inline(always)]
+fn tail_add4(tail: u32x8, row: u32x8) -> u32x8 {
+    let field = u32x8::splat(0x3ff);
+    let byte = u32x8::splat(0xff);
+    let max: i16x16 = i16x16::splat(1023);
+    // Color sums: each field + its byte, capped at 1023 (values < 2^15: i16 min is exact).
+    let sat = |sum: u32x8| -> u32x8 { cast(cast::<u32x8, i16x16>(sum).min(max)) };
+    let r = sat((tail & field) + (row & byte));
+    let g = sat(((tail >> 10) & field) + ((row >> 8) & byte));
+    let b = sat(((tail >> 20) & field) + ((row >> 16) & byte));
+    let word0 = r | (g << 10) | (b << 20) | (tail & u32x8::splat(0xc000_0000));
+    // Alpha sum += 255 - T and count += 1: two saturating u16 adds in the high dword.
+    let inc = (u32x8::splat(255) - (row >> 24)) | u32x8::splat(1 << 16);
+    let inc = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(inc & LO) << 32);
+    let word1: u32x8 = cast(cast::<u32x8, u16x16>(tail).saturating_add(cast(inc)));
+    let new = (word0 & LO) | (word1 & HI);
+    // Invisible rows (no color, T = 255) are skipped.
+    let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
+    invisible.select(tail, new)
+}
+
+impl Rows8 {
+    #[inline(always)]
+    fn load(rows: &[Row; 8]) -> Rows8 {
+        let [a, b]: [u32x8; 2] = cast(*rows);
+        Rows8 { a, b }
+    }
+
+    #[inline(always)]
+    fn store(self) -> [Row; 8] {
+        cast([self.a, self.b])
+    }
+
+    #[inline(always)]
+    fn load_tails(tails: &[Tail; 8]) -> Rows8 {
+        let [a, b]: [u32x8; 2] = cast(*tails);
+        Rows8 { a, b }
+    }
+
+    #[inline(always)]
+    fn store_tails(self) -> [Tail; 8] {
+        cast([self.a, self.b])
+    }
+}
+
+impl RowLanes for Rows8 {
+    type Mask = Mask8;
+    type Tail = Rows8;
+    #[inline(always)]
+    fn depth_le(self, other: Self) -> Mask8 {
+        let le = |x: u32x8, y: u32x8| {
+            let m: f32x8 = cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y));
+            widen_hi(cast::<f32x8, u32x8>(m))
+        };
+        Mask8 {
+            a: le(self.a, other.a),
+            b: le(self.b, other.b),
+        }
+    }
+    #[inline(always)]
+    fn select(mask: Mask8, x: Self, y: Self) -> Self {
+        Rows8 {
+            a: mask.a.select(x.a, y.a),
+            b: mask.b.select(x.b, y.b),
+        }
+    }
+    #[inline(always)]
+    fn merge(front: Self, back: Self) -> Self {
+        Rows8 {
+            a: merge4(front.a, back.a),
+            b: merge4(front.b, back.b),
+        }
+    }
+    #[inline(always)]
+    fn tail_add(tail: Rows8, row: Self) -> Rows8 {
+        Rows8 {
+            a: tail_add4(tail.a, row.a),
+            b: tail_add4(tail.b, row.b),
+        }
+    }
+    #[inline(always)]
+    fn select_tail(mask: Mask8, x: Rows8, y: Rows8) -> Rows8 {
+        Self::select(mask, x, y)
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Public span API.
+// ---------------------------------------------------------------------------------------
+
+/// An MLAB span: 8 pixels with `M` rows each, layer-major (`span[j][lane]` is row `j` of
+/// pixel `lane`).
+pub type MlabSpan<const M: usize> = [[Row; LANES]; M];
+
+/// A Hybrid Transparency span: 8 pixels with `K` head rows (layer-major) and 8 tails.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(C)]
+pub struct HybridSpan<const K: usize> {
+    /// `head[j][lane]` is head row `j` of pixel `lane`.
+    pub head: [[Row; LANES]; K],
+    /// The tail of each pixel.
+    pub tails: [Tail; LANES],
+}
+
+impl<const K: usize> HybridSpan<K> {
+    /// Empty heads and tails.
+    pub const fn new() -> Self {
+        HybridSpan {
+            head: [[Row::EMPTY; LANES]; K],
+            tails: [Tail::EMPTY; LANES],
+        }
+    }
+}
+
+impl<const K: usize> Default for HybridSpan<K> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Listing 1 on 8 pixels: insert `rows[lane]` into pixel `lane` for every lane whose bit is
+/// set in `mask`. Byte-identical to [`crate::mlab::insert`] on each lane, for any rows.
+#[inline]
+pub fn mlab_insert<const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
+    let mut b: [Rows8; M] = span.map(|layer| Rows8::load(&layer));
+    crate::mlab::insert_lanes(&mut b, Rows8::load(rows), Mask8::from_bits(mask));
+    for (layer, r) in span.iter_mut().zip(b) {
+        *layer = r.store();
+    }
+}
+
+/// Listing 2 on 8 pixels. Byte-identical to [`crate::hybrid::insert`] on each lane.
+#[inline]
+pub fn hybrid_insert<const K: usize>(span: &mut HybridSpan<K>, rows: &[Row; LANES], mask: u8) {
+    let mut head: [Rows8; K] = span.head.map(|layer| Rows8::load(&layer));
+    let mut tail = Rows8::load_tails(&span.tails);
+    crate::hybrid::insert_lanes(&mut head, &mut tail, Rows8::load(rows), Mask8::from_bits(mask));
+    for (layer, r) in span.head.iter_mut().zip(head) {
+        *layer = r.store();
+    }
+    span.tails = tail.store_tails();
+}
+
+/// Eight fragments, structure of arrays (premultiplied color unless quantized with
+/// [`FragmentLanes::quantize_straight`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FragmentLanes {
+    /// `color[channel][lane]`, channels R, G, B.
+    pub color: [[f32; LANES]; 3],
+    /// Alpha per lane.
+    pub alpha: [f32; LANES],
+    /// Depth per lane.
+    pub depth: [f32; LANES],
+}
+
+/// Rows quantized from [`FragmentLanes`], and which lanes were valid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct QuantizedLanes {
+    /// The rows (lanes not in `valid` hold [`Row::EMPTY`]).
+    pub rows: [Row; LANES],
+    /// Lanes that were on and valid.
+    pub valid: u8,
+    /// Lanes that were on and invalid: exactly the lanes where the scalar constructor
+    /// ([`crate::Fragment::premultiplied`] or [`crate::Fragment::straight`]) returns an error.
+    pub invalid: u8,
+}
+
+impl FragmentLanes {
+    /// Validate and quantize premultiplied fragments, as [`crate::Fragment::premultiplied`]
+    /// then [`crate::Fragment::row`] would, lane by lane.
+    pub fn quantize(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl(mask, false)
+    }
+
+    /// Validate and quantize straight-color fragments, as [`crate::Fragment::straight`] then
+    /// [`crate::Fragment::row`] would (`color * alpha`, one f32 multiply).
+    pub fn quantize_straight(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl(mask, true)
+    }
+
+    fn quantize_impl(&self, mask: u8, straight: bool) -> QuantizedLanes {
+        let zero = f32x8::ZERO;
+        let one = f32x8::ONE;
+        let alpha = f32x8::new(self.alpha);
+        let depth = f32x8::new(self.depth);
+        // Every comparison is false for NaN, so NaN anywhere makes the lane invalid.
+        let mut ok = alpha.simd_ge(zero) & alpha.simd_le(one) & depth.abs().simd_lt(f32x8::splat(f32::INFINITY));
+        let mut bytes = [u32x8::ZERO; 3];
+        for (c, out) in self.color.iter().zip(bytes.iter_mut()) {
+            let raw = f32x8::new(*c);
+            let pre = if straight {
+                ok &= raw.simd_ge(zero) & raw.simd_lt(f32x8::splat(f32::INFINITY));
+                raw * alpha
+            } else {
+                raw
+            };
+            ok &= pre.simd_ge(zero) & pre.simd_le(one);
+            *out = quantize8(pre);
+        }
+        let t = u32x8::splat(255) - quantize8(alpha);
+        let rgbt: [u32; LANES] = cast(bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24));
+        let z: [u32; LANES] = cast(depth);
+        let valid = (ok.to_bitmask() as u8) & mask;
+        let rows = core::array::from_fn(|i| {
+            if valid & (1 << i) != 0 {
+                Row::from_words([rgbt[i], z[i]])
+            } else {
+                Row::EMPTY
+            }
+        });
+        QuantizedLanes {
+            rows,
+            valid,
+            invalid: mask & !valid,
+        }
+    }
+}
+
+/// `floor(v * 255 + 0.5)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`]); other lanes
+/// give unspecified bytes and must be masked.
+#[inline(always)]
+fn quantize8(v: f32x8) -> u32x8 {
+    let x = v * f32x8::splat(255.0) + f32x8::splat(0.5);
+    cast::<i32x8, u32x8>(x.fast_trunc_int()) & u32x8::splat(0xff)
+}
+
+/// Validate, quantize and insert (Listing 1) one fragment per lane; returns the lanes that
+/// were on but invalid (left untouched).
+#[inline]
+pub fn mlab_insert_fragments<const M: usize>(span: &mut MlabSpan<M>, fragments: &FragmentLanes, mask: u8) -> u8 {
+    let q = fragments.quantize(mask);
+    mlab_insert(span, &q.rows, q.valid);
+    q.invalid
+}
+
+/// Validate, quantize and insert (Listing 2) one fragment per lane; returns the invalid lanes.
+#[inline]
+pub fn hybrid_insert_fragments<const K: usize>(span: &mut HybridSpan<K>, fragments: &FragmentLanes, mask: u8) -> u8 {
+    let q = fragments.quantize(mask);
+    hybrid_insert(span, &q.rows, q.valid);
+    q.invalid
+}
+
+// ---------------------------------------------------------------------------------------
+// Resolve.
+// ---------------------------------------------------------------------------------------
+
+/// The resolve of 8 pixels, structure of arrays; lane `i` equals the scalar [`Resolved`]
+/// of pixel `i` bit for bit ([`ResolvedLanes::get`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ResolvedLanes {
+    /// `color[channel][lane]`: premultiplied color of the transparent layers.
+    pub color: [[f32; LANES]; 3],
+    /// Background visibility per lane.
+    pub transmittance: [f32; LANES],
+}
+
+/// Color and transmittance bytes of one layer of 8 rows, as exact f32 (`[R, G, B, T]`).
+#[inline(always)]
+fn layer_bytes(layer: &[Row; LANES]) -> [f32x8; 4] {
+    let w: [u32; 16] = cast(*layer);
+    let rgbt = u32x8::new([w[0], w[2], w[4], w[6], w[8], w[10], w[12], w[14]]);
+    let byte = u32x8::splat(0xff);
+    [rgbt & byte, (rgbt >> 8) & byte, (rgbt >> 16) & byte, rgbt >> 24].map(f32x8::from_u)
+}
+
+/// Eq. 5 over an MLAB span (as [`crate::resolve_rows`] on each pixel).
+#[inline]
+pub fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> ResolvedLanes {
+    let (color, t) = crate::resolve::resolve_layers(span.iter().map(layer_bytes));
+    ResolvedLanes::from_lanes(color, t)
+}
+
+/// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
+#[inline]
+pub fn hybrid_resolve<const K: usize>(span: &HybridSpan<K>) -> ResolvedLanes {
+    let head = crate::resolve::resolve_layers(span.head.iter().map(layer_bytes));
+    let w: [u32; 16] = cast(span.tails);
+    let w0 = u32x8::new([w[0], w[2], w[4], w[6], w[8], w[10], w[12], w[14]]);
+    let w1 = u32x8::new([w[1], w[3], w[5], w[7], w[9], w[11], w[13], w[15]]);
+    let field = u32x8::splat(0x3ff);
+    let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
+    let (color, t) = crate::hybrid::resolve_lanes::<f32x8>(head, sums, w1 & u32x8::splat(0xffff), w1 >> 16);
+    ResolvedLanes::from_lanes(color, t)
+}
+
+impl ResolvedLanes {
+    fn from_lanes(color: [f32x8; 3], t: f32x8) -> ResolvedLanes {
+        ResolvedLanes {
+            color: color.map(|c| c.to_array()),
+            transmittance: t.to_array(),
+        }
+    }
+
+    /// Lane `lane` (0..8) as a scalar [`Resolved`]; `None` past the last lane.
+    pub fn get(&self, lane: usize) -> Option<Resolved> {
+        let t = *self.transmittance.get(lane)?;
+        let c = glam::Vec3::new(self.color[0][lane], self.color[1][lane], self.color[2][lane]);
+        Some(Resolved {
+            color: c,
+            transmittance: t,
+        })
+    }
+
+    /// The 8 pixels for `background` ([`Resolved::pixel`] per lane).
+    pub fn pixels(&self, background: Background) -> [Vec4; LANES] {
+        core::array::from_fn(|i| self.get(i).unwrap_or(Resolved::CLEAR).pixel(background))
+    }
+
+    /// The 8 pixels as RGBA8 ([`crate::to_rgba8`] per lane), computed in lanes.
+    pub fn rgba8(&self, background: Background) -> [[u8; 4]; LANES] {
+        let c = self.color.map(f32x8::new);
+        let t = f32x8::new(self.transmittance);
+        let rgba: [f32x8; 4] = match background {
+            Background::Opaque(bg) => {
+                let bg = bg.to_array().map(f32x8::splat);
+                [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t, f32x8::ONE]
+            }
+            Background::Transparent => [c[0], c[1], c[2], f32x8::ONE - t],
+        };
+        let q = rgba.map(crate::resolve::to_unorm8_lanes);
+        let packed: [u32; LANES] = cast(q[0] | (q[1] << 8) | (q[2] << 16) | (q[3] << 24));
+        packed.map(u32::to_le_bytes)
+    }
+}
+
+/// The same span in the per-pixel arrangement: `[pixel][row]`.
+pub fn to_pixel_major<const M: usize>(span: &MlabSpan<M>) -> [[Row; M]; LANES] {
+    core::array::from_fn(|lane| core::array::from_fn(|j| span[j][lane]))
+}
+
+/// The inverse of [`to_pixel_major`].
+pub fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> MlabSpan<M> {
+    core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
+}
