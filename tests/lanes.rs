@@ -4,6 +4,8 @@
 //! Set `MLAB_EXPECT_BACKEND=avx2` (or `sse2`) to make `backend_is_the_expected_one` fail
 //! when the build did not pick that backend (CI does, for both targets).
 
+#![allow(clippy::needless_range_loop)] // lane-indexed loops mirror the per-lane scalar calls
+
 mod common;
 
 use mlab::glam::Vec3;
@@ -127,7 +129,7 @@ fn check_all(stream: &[Step], garbage: &[u64]) -> Result<(), TestCaseError> {
         check_mlab::<1>(&core::array::from_fn(|l| [row(l)]), stream)?;
         let mut h = HybridSpan::<3>::new();
         h.head = core::array::from_fn(|j| core::array::from_fn(|l| row(100 + j * 8 + l)));
-        h.tails = core::array::from_fn(|l| tail(l));
+        h.tails = core::array::from_fn(tail);
         check_hybrid::<3>(&h, stream)?;
     }
     Ok(())
