@@ -11,6 +11,10 @@
 //! kernel becomes one more [`Method`] variant whose `render` calls it; see
 //! [`Method::standard_list`].
 
+// Channel loops `for k in 0..3` index several arrays at once (target, fragment, weight);
+// written as in the blend equations.
+#![allow(clippy::needless_range_loop)]
+
 use crate::stream::{Bins, Stream};
 use mlab::glam::Vec3;
 use mlab::half::f16;
@@ -152,6 +156,10 @@ pub enum Method {
     Reference,
     /// MLAB (kernel, scalar) with `M` rows.
     Mlab(usize),
+    /// MLAB (kernel, scalar) with `M` rows, fed each pixel's fragments front to back (the
+    /// sorted stream): no fragment ever lands between merged rows, so what is left is the
+    /// 8-bit quantization (a check of the paper's claim about the merge).
+    MlabSorted(usize),
     /// Hybrid Transparency (kernel, scalar) with `K` head rows and a tail.
     Hybrid(usize),
     /// OVER in submission order into an `RGBA16F` target (unsorted alpha blending, "AB").
@@ -179,6 +187,8 @@ impl Method {
         for m in [1, 2, 4, 8] {
             v.push(Method::Hybrid(m - 1));
         }
+        v.push(Method::MlabSorted(1));
+        v.push(Method::MlabSorted(4));
         for n in [2, 4, 8] {
             v.push(Method::Adaptive(n));
         }
@@ -193,6 +203,7 @@ impl Method {
         match self {
             Method::Reference => "A-buffer".into(),
             Method::Mlab(m) => format!("MLAB {m}"),
+            Method::MlabSorted(m) => format!("MLAB {m} sorted"),
             Method::Hybrid(k) => format!("HT {k}"),
             Method::Over => "OVER unsorted".into(),
             Method::Under => "UNDER sorted".into(),
@@ -216,7 +227,7 @@ impl Method {
     pub fn bytes_per_pixel(self, frame: &Frame) -> f64 {
         match self {
             Method::Reference => 4.0 + 12.0 * frame.stream.frags.len() as f64 / frame.stream.pixels().max(1) as f64,
-            Method::Mlab(m) => 8.0 * m as f64,
+            Method::Mlab(m) | Method::MlabSorted(m) => 8.0 * m as f64,
             Method::Hybrid(k) => 8.0 * (k + 1) as f64,
             Method::Over | Method::Under | Method::Meshkin => 8.0,
             Method::Wboit(_) => 9.0,
@@ -229,7 +240,8 @@ impl Method {
     pub fn render(self, frame: &Frame) -> Result<Image, String> {
         match self {
             Method::Reference => Ok(reference(frame)),
-            Method::Mlab(m) => mlab_dyn(m, frame),
+            Method::Mlab(m) => mlab_dyn(m, frame, false),
+            Method::MlabSorted(m) => mlab_dyn(m, frame, true),
             Method::Hybrid(k) => hybrid_dyn(k, frame),
             Method::Over => Ok(over(frame)),
             Method::Under => Ok(under(frame)),
@@ -321,15 +333,26 @@ fn err(e: impl std::fmt::Display) -> String {
     e.to_string()
 }
 
-/// MLAB with the kernel's framebuffer view, in submission order.
-pub fn run_mlab<const M: usize>(frame: &Frame) -> Result<Image, String> {
+/// MLAB with the kernel's framebuffer view, in submission order (or, when `sorted`, each
+/// pixel's fragments front to back).
+pub fn run_mlab<const M: usize>(frame: &Frame, sorted: bool) -> Result<Image, String> {
     let s = frame.stream;
     let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M>::rows_needed(s.width, s.height).map_err(err)?];
     let mut fb = MlabFramebuffer::<M>::new(&mut storage, s.width, s.height).map_err(err)?;
     fb.clear();
-    for (i, f) in s.frags.iter().enumerate() {
+    let insert = |fb: &mut MlabFramebuffer<M>, i: usize| -> Result<(), String> {
+        let f = &s.frags[i];
         let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
-        fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;
+        fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)
+    };
+    if sorted {
+        for &i in &frame.sorted.index {
+            insert(&mut fb, i as usize)?;
+        }
+    } else {
+        for i in 0..s.frags.len() {
+            insert(&mut fb, i)?;
+        }
     }
     kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
 }
@@ -348,18 +371,18 @@ pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<Image, String> {
     kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
 }
 
-fn mlab_dyn(m: usize, frame: &Frame) -> Result<Image, String> {
+fn mlab_dyn(m: usize, frame: &Frame, sorted: bool) -> Result<Image, String> {
     match m {
-        1 => run_mlab::<1>(frame),
-        2 => run_mlab::<2>(frame),
-        3 => run_mlab::<3>(frame),
-        4 => run_mlab::<4>(frame),
-        5 => run_mlab::<5>(frame),
-        6 => run_mlab::<6>(frame),
-        7 => run_mlab::<7>(frame),
-        8 => run_mlab::<8>(frame),
-        12 => run_mlab::<12>(frame),
-        16 => run_mlab::<16>(frame),
+        1 => run_mlab::<1>(frame, sorted),
+        2 => run_mlab::<2>(frame, sorted),
+        3 => run_mlab::<3>(frame, sorted),
+        4 => run_mlab::<4>(frame, sorted),
+        5 => run_mlab::<5>(frame, sorted),
+        6 => run_mlab::<6>(frame, sorted),
+        7 => run_mlab::<7>(frame, sorted),
+        8 => run_mlab::<8>(frame, sorted),
+        12 => run_mlab::<12>(frame, sorted),
+        16 => run_mlab::<16>(frame, sorted),
         _ => Err(format!("MLAB {m}: supported row counts are {MLAB_SIZES:?}")),
     }
 }

@@ -18,6 +18,8 @@ pub struct Quality {
     pub max_abs: f64,
     /// Mean FLIP error in `[0, 1]`, when computed.
     pub flip: Option<f64>,
+    /// Mean signed channel error `test - reference` (negative: darker than the reference).
+    pub mean_signed: f64,
     /// Mean of `vis(method) - vis(reference)`: positive means the background shows through
     /// too much.
     pub vis_bias: f64,
@@ -48,11 +50,12 @@ fn display(x: f32) -> f64 {
 pub fn compare(reference: &Image, test: &Image, with_flip: bool) -> Quality {
     assert_eq!((reference.width, reference.height), (test.width, test.height));
     let n = reference.rgb.len().max(1);
-    let (mut se, mut max_abs, mut vb) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut se, mut max_abs, mut vb, mut sd) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for (a, b) in reference.rgb.iter().zip(&test.rgb) {
         for k in 0..3 {
             let d = display(a[k]) - display(b[k]);
             se += d * d;
+            sd -= d;
             max_abs = max_abs.max(d.abs());
         }
     }
@@ -71,6 +74,7 @@ pub fn compare(reference: &Image, test: &Image, with_flip: bool) -> Quality {
         psnr,
         max_abs,
         flip,
+        mean_signed: sd / (3 * n) as f64,
         vis_bias: vb / n as f64,
     }
 }

@@ -119,12 +119,12 @@ fn num(x: f64, digits: usize) -> String {
 /// The full Markdown table: one row per scene and method.
 pub fn full_table(evals: &[Evaluation]) -> String {
     let mut s = String::from(
-        "| scene | method | B/px | ms | RMSE | PSNR dB | max err | mean FLIP | vis bias |\n|---|---|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| scene | method | B/px | ms | RMSE | PSNR dB | max err | mean FLIP | signed err | vis bias |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for e in evals {
         let r = &e.reference;
         s += &format!(
-            "| {} | {} ({} frags, max {}/px) | {:.1} | {:.1} | 0 | inf | 0 | 0 | 0 |\n",
+            "| {} | {} ({} frags, max {}/px) | {:.1} | {:.1} | 0 | inf | 0 | 0 | 0 | 0 |\n",
             e.name,
             r.method.name(),
             e.fragments,
@@ -135,7 +135,7 @@ pub fn full_table(evals: &[Evaluation]) -> String {
         for x in &e.entries {
             let q = &x.quality;
             s += &format!(
-                "| {} | {} | {:.0} | {:.1} | {:.4} | {} | {:.3} | {} | {:+.4} |\n",
+                "| {} | {} | {:.0} | {:.1} | {:.4} | {} | {:.3} | {} | {:+.4} | {:+.4} |\n",
                 e.name,
                 x.method.name(),
                 x.bytes,
@@ -144,6 +144,7 @@ pub fn full_table(evals: &[Evaluation]) -> String {
                 num(q.psnr, 1),
                 q.max_abs,
                 q.flip.map_or("-".into(), |f| format!("{f:.4}")),
+                q.mean_signed,
                 q.vis_bias
             );
         }

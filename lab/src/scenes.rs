@@ -400,36 +400,33 @@ fn teapots(r: &mut Raster, rng: &mut Rng) -> [f32; 3] {
         let rw = rad * zc / focal;
         let col = PALETTE[rng.below(PALETTE.len())];
         let a0 = rng.range(0.2, 0.45);
-        let band = (s * 0.02).max(2.0);
-        let bands = ((2.0 * rad) / band).ceil() as usize + 1;
+        // Bands of whole pixel rows, so that no pixel is scanned twice.
+        let band = (s * 0.02).max(2.0).floor();
+        let top = (cy - rad - 1.0).floor();
+        let bands = ((2.0 * rad + 2.0) / band).ceil() as usize + 1;
         let mut order: Vec<(usize, bool)> = (0..bands).flat_map(|b| [(b, true), (b, false)]).collect();
         rng.shuffle(&mut order);
         for (b, front) in order {
-            let y0 = cy - rad + b as f32 * band;
-            r.scan(
-                cx - rad - 1.0,
-                y0,
-                cx + rad + 1.0,
-                (y0 + band).min(cy + rad + 1.0),
-                |px, py| {
-                    let (dx, dy) = ((px - cx) / rad, (py - cy) / rad);
-                    let q = dx * dx + dy * dy;
-                    let dist = q.sqrt();
-                    let cov = clamp01((1.0 - dist) * rad + 0.5);
-                    if cov <= 0.0 {
-                        return None;
-                    }
-                    let h = (1.0 - q.min(1.0)).sqrt();
-                    let q2 = q.min(1.0) * q.min(1.0);
-                    let shade = if front { 1.0 } else { 0.7 };
-                    Some(Shade {
-                        depth: if front { zc - rw * h } else { zc + rw * h },
-                        color: col.map(|c| c * shade),
-                        alpha: (a0 + (0.9 - a0) * q2) * cov,
-                        light: [0.0; 3],
-                    })
-                },
-            );
+            let y0 = top + b as f32 * band;
+            r.scan(cx - rad - 1.0, y0, cx + rad + 1.0, y0 + band, |px, py| {
+                let (dx, dy) = ((px - cx) / rad, (py - cy) / rad);
+                let q = dx * dx + dy * dy;
+                let dist = q.sqrt();
+                let cov = clamp01((1.0 - dist) * rad + 0.5);
+                if cov <= 0.0 {
+                    return None;
+                }
+                // At the anti-aliased rim the faces would meet: keep them apart.
+                let h = (1.0 - q.min(1.0)).sqrt().max(0.05);
+                let q2 = q.min(1.0) * q.min(1.0);
+                let shade = if front { 1.0 } else { 0.7 };
+                Some(Shade {
+                    depth: if front { zc - rw * h } else { zc + rw * h },
+                    color: col.map(|c| c * shade),
+                    alpha: (a0 + (0.9 - a0) * q2) * cov,
+                    light: [0.0; 3],
+                })
+            });
         }
     }
     [0.45, 0.45, 0.48]

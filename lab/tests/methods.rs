@@ -271,3 +271,15 @@ fn every_standard_method_renders_a_small_scene() {
     assert!(Method::Mlab(9).render(&f).is_err());
     assert!(Method::Adaptive(0).render(&f).is_err());
 }
+
+#[test]
+fn mlab_merge_is_exact_unless_a_fragment_lands_between_merged_rows() {
+    // Red z 1 and blue z 3 merge in one row; green z 2 then arrives between them.
+    let s = pixel(&[(1.0, RED, 0.5), (3.0, BLUE, 0.5), (2.0, GREEN, 0.5)], [0.0; 3]);
+    let exact = render(Method::Reference, &s).rgb[0];
+    // Front to back, every merge is of neighbours: only 8-bit rounding remains.
+    close(render(Method::MlabSorted(1), &s).rgb[0], exact, 2.0 / 255.0);
+    // In submission order green is merged behind blue: green 0.125 instead of 0.25.
+    let unsorted = render(Method::Mlab(1), &s).rgb[0];
+    assert!((unsorted[1] - exact[1]).abs() > 0.1, "{unsorted:?} vs {exact:?}");
+}

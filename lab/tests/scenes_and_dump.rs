@@ -13,7 +13,7 @@ const PINNED: [(Scene, u64); 5] = [
     (Scene::Hair, 0x30c954954e504741),
     (Scene::Particles, 0x3e95706a56b8704f),
     (Scene::Forest, 0x99975b67b8d53ec4),
-    (Scene::Teapots, 0x9bdeeb9f52fa3fee),
+    (Scene::Teapots, 0x9c1633910248c6f5),
     (Scene::Glass, 0x760e1d1085a9dd51),
 ];
 
