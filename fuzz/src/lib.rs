@@ -18,3 +18,17 @@ pub mod check;
 pub mod input;
 pub mod reference;
 pub mod targets;
+
+/// The instruction set this fuzz build targets (`-C target-cpu`): printed once at start.
+pub const BACKEND: &str = if cfg!(target_feature = "avx2") {
+    "avx2"
+} else if cfg!(target_feature = "sse2") {
+    "sse2"
+} else {
+    "scalar"
+};
+
+/// Print which backend runs (called once by each target's `init`).
+pub fn announce(target: &str) {
+    eprintln!("mlab_fuzz backend: {BACKEND} ({target})");
+}
