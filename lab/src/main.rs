@@ -277,8 +277,8 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
         mkdir(&out)?;
         let f = if size.0 >= 1280 { 8 } else { 4 };
         figure(&rows, f).write_png(&out.join("figure.png")).map_err(runtime)?;
-        figure(&small_rows, f + f / 4)
-            .write_png(&out.join("figure-small.png"))
+        figure(&small_rows, f * 3 / 2)
+            .write_png_with(&out.join("figure-small.png"), png::Compression::High)
             .map_err(runtime)?;
     }
     println!(

@@ -88,13 +88,18 @@ impl Picture {
         }
     }
 
-    /// Write as an 8-bit RGB PNG.
+    /// Write as an 8-bit RGB PNG, fast compression.
     pub fn write_png(&self, path: &Path) -> Result<(), String> {
+        self.write_png_with(path, png::Compression::Fast)
+    }
+
+    /// Write as an 8-bit RGB PNG with the given compression.
+    pub fn write_png_with(&self, path: &Path, compression: png::Compression) -> Result<(), String> {
         let file = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let mut enc = png::Encoder::new(std::io::BufWriter::new(file), self.width, self.height);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
-        enc.set_compression(png::Compression::Fast);
+        enc.set_compression(compression);
         let mut w = enc.write_header().map_err(|e| format!("{}: {e}", path.display()))?;
         w.write_image_data(&self.data)
             .map_err(|e| format!("{}: {e}", path.display()))?;
