@@ -294,6 +294,26 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
         summary_table(&evals)
     );
     println!("## All metrics\n\n{}", full_table(&evals));
+    println!("## Lanes against scalar (backend {})\n", mlab::lanes::BACKEND);
+    for e in &evals {
+        let find = |m: Method| e.entries.iter().find(|x| x.method == m).map(|x| &x.image);
+        for (scalar, lanes) in [
+            (Method::Mlab(4), Method::MlabLanes(4)),
+            (Method::Hybrid(3), Method::HybridLanes(3)),
+        ] {
+            if let (Some(a), Some(b)) = (find(scalar), find(lanes)) {
+                let same = a == b;
+                println!(
+                    "- {}: {} {} {}",
+                    e.name,
+                    lanes.name(),
+                    if same { "==" } else { "DIFFERS FROM" },
+                    scalar.name()
+                );
+            }
+        }
+    }
+    println!();
     for e in evals.iter().filter(|e| e.name == "PARTICLES") {
         println!("## Background visibility bias on PARTICLES (mean signed error, covered pixels)\n");
         println!("| method | >= 1 fragment | >= 32 fragments |\n|---|---:|---:|");

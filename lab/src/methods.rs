@@ -18,6 +18,7 @@
 use crate::stream::{Bins, Stream};
 use mlab::glam::Vec3;
 use mlab::half::f16;
+use mlab::lanes::{self, HybridSpan, LANES, ResolvedLanes};
 use mlab::{HybridFramebuffer, MlabFramebuffer, Resolved, Row};
 
 /// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
@@ -162,6 +163,11 @@ pub enum Method {
     MlabSorted(usize),
     /// Hybrid Transparency (kernel, scalar) with `K` head rows and a tail.
     Hybrid(usize),
+    /// MLAB with `M` rows through the kernel's 8-pixel lanes (`mlab::lanes`); must give the
+    /// same image as [`Method::Mlab`] bit for bit.
+    MlabLanes(usize),
+    /// HT with `K` head rows through the kernel's 8-pixel lanes.
+    HybridLanes(usize),
     /// OVER in submission order into an `RGBA16F` target (unsorted alpha blending, "AB").
     Over,
     /// UNDER, front to back over the sorted stream, `RGBA16F`, transmittance thresholding.
@@ -187,6 +193,8 @@ impl Method {
         for m in [1, 2, 4, 8] {
             v.push(Method::Hybrid(m - 1));
         }
+        v.push(Method::MlabLanes(4));
+        v.push(Method::HybridLanes(3));
         v.push(Method::MlabSorted(1));
         v.push(Method::MlabSorted(4));
         for n in [2, 4, 8] {
@@ -204,6 +212,8 @@ impl Method {
             Method::Reference => "A-buffer".into(),
             Method::Mlab(m) => format!("MLAB {m}"),
             Method::MlabSorted(m) => format!("MLAB {m} sorted"),
+            Method::MlabLanes(m) => format!("MLAB {m} lanes"),
+            Method::HybridLanes(k) => format!("HT {k} lanes"),
             Method::Hybrid(k) => format!("HT {k}"),
             Method::Over => "OVER unsorted".into(),
             Method::Under => "UNDER sorted".into(),
@@ -227,7 +237,8 @@ impl Method {
     pub fn bytes_per_pixel(self, frame: &Frame) -> f64 {
         match self {
             Method::Reference => 4.0 + 12.0 * frame.stream.frags.len() as f64 / frame.stream.pixels().max(1) as f64,
-            Method::Mlab(m) | Method::MlabSorted(m) => 8.0 * m as f64,
+            Method::Mlab(m) | Method::MlabSorted(m) | Method::MlabLanes(m) => 8.0 * m as f64,
+            Method::HybridLanes(k) => 8.0 * (k + 1) as f64,
             Method::Hybrid(k) => 8.0 * (k + 1) as f64,
             Method::Over | Method::Under | Method::Meshkin => 8.0,
             Method::Wboit(_) => 9.0,
@@ -242,6 +253,60 @@ impl Method {
             Method::Reference => Ok(reference(frame)),
             Method::Mlab(m) => mlab_dyn(m, frame, false),
             Method::MlabSorted(m) => mlab_dyn(m, frame, true),
+            Method::MlabLanes(m) => match m {
+                1 => run_lanes(
+                    frame,
+                    [[Row::EMPTY; LANES]; 1],
+                    lanes::mlab_insert::<1>,
+                    lanes::mlab_resolve::<1>,
+                ),
+                2 => run_lanes(
+                    frame,
+                    [[Row::EMPTY; LANES]; 2],
+                    lanes::mlab_insert::<2>,
+                    lanes::mlab_resolve::<2>,
+                ),
+                4 => run_lanes(
+                    frame,
+                    [[Row::EMPTY; LANES]; 4],
+                    lanes::mlab_insert::<4>,
+                    lanes::mlab_resolve::<4>,
+                ),
+                8 => run_lanes(
+                    frame,
+                    [[Row::EMPTY; LANES]; 8],
+                    lanes::mlab_insert::<8>,
+                    lanes::mlab_resolve::<8>,
+                ),
+                _ => Err(format!("MLAB {m} lanes: supported row counts are 1, 2, 4, 8")),
+            },
+            Method::HybridLanes(k) => match k {
+                0 => run_lanes(
+                    frame,
+                    HybridSpan::<0>::new(),
+                    lanes::hybrid_insert::<0>,
+                    lanes::hybrid_resolve::<0>,
+                ),
+                1 => run_lanes(
+                    frame,
+                    HybridSpan::<1>::new(),
+                    lanes::hybrid_insert::<1>,
+                    lanes::hybrid_resolve::<1>,
+                ),
+                3 => run_lanes(
+                    frame,
+                    HybridSpan::<3>::new(),
+                    lanes::hybrid_insert::<3>,
+                    lanes::hybrid_resolve::<3>,
+                ),
+                7 => run_lanes(
+                    frame,
+                    HybridSpan::<7>::new(),
+                    lanes::hybrid_insert::<7>,
+                    lanes::hybrid_resolve::<7>,
+                ),
+                _ => Err(format!("HT {k} lanes: supported head sizes are 0, 1, 3, 7")),
+            },
             Method::Hybrid(k) => hybrid_dyn(k, frame),
             Method::Over => Ok(over(frame)),
             Method::Under => Ok(under(frame)),
@@ -369,6 +434,56 @@ pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<Image, String> {
         fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;
     }
     kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
+}
+
+/// A kernel through its 8-pixel lanes: the frame is cut into spans of 8 pixels of a row;
+/// consecutive fragments of the stream that fall in one span on distinct lanes are inserted
+/// with one call (a rasterizer's span of a primitive), which keeps each pixel's submission
+/// order.
+fn run_lanes<S: Clone>(
+    frame: &Frame,
+    empty: S,
+    insert: fn(&mut S, &[Row; LANES], u8),
+    resolve: fn(&S) -> ResolvedLanes,
+) -> Result<Image, String> {
+    let s = frame.stream;
+    let spans_x = (s.width as usize).div_ceil(LANES);
+    let mut spans = vec![empty; spans_x * s.height as usize];
+    let (mut cur, mut rows, mut mask) = (0usize, [Row::EMPTY; LANES], 0u8);
+    for (i, f) in s.frags.iter().enumerate() {
+        let row = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?.row();
+        let (x, y) = ((f.pixel % s.width) as usize, (f.pixel / s.width) as usize);
+        let (span, lane) = (y * spans_x + x / LANES, x % LANES);
+        if mask != 0 && (span != cur || mask & (1 << lane) != 0) {
+            insert(&mut spans[cur], &rows, mask);
+            (rows, mask) = ([Row::EMPTY; LANES], 0);
+        }
+        cur = span;
+        rows[lane] = row;
+        mask |= 1 << lane;
+    }
+    if mask != 0 {
+        insert(&mut spans[cur], &rows, mask);
+    }
+    let bg = Vec3::from(s.background);
+    let mut rgb = Vec::with_capacity(s.pixels());
+    let mut vis = Vec::with_capacity(s.pixels());
+    for y in 0..s.height as usize {
+        for sx in 0..spans_x {
+            let r = resolve(&spans[y * spans_x + sx]);
+            for lane in 0..LANES.min(s.width as usize - sx * LANES) {
+                let p = r.get(lane).ok_or("lane out of range")?;
+                rgb.push(p.over(bg).to_array());
+                vis.push(p.transmittance);
+            }
+        }
+    }
+    Ok(Image {
+        width: s.width,
+        height: s.height,
+        rgb,
+        vis,
+    })
 }
 
 fn mlab_dyn(m: usize, frame: &Frame, sorted: bool) -> Result<Image, String> {

@@ -283,3 +283,27 @@ fn mlab_merge_is_exact_unless_a_fragment_lands_between_merged_rows() {
     let unsorted = render(Method::Mlab(1), &s).rgb[0];
     assert!((unsorted[1] - exact[1]).abs() > 0.1, "{unsorted:?} vs {exact:?}");
 }
+
+#[test]
+fn lanes_give_the_same_image_as_scalar() {
+    for sc in oit_lab::scenes::Scene::ALL {
+        // 37 columns: the last span of each row is partial.
+        let s = sc.generate(37, 21, 5);
+        let f = Frame::new(&s);
+        for m in [1, 2, 4, 8] {
+            let (a, b) = (
+                Method::Mlab(m).render(&f).unwrap(),
+                Method::MlabLanes(m).render(&f).unwrap(),
+            );
+            assert!(a == b, "{}: MLAB {m} lanes differ from scalar", sc.name());
+        }
+        for k in [0, 1, 3, 7] {
+            let (a, b) = (
+                Method::Hybrid(k).render(&f).unwrap(),
+                Method::HybridLanes(k).render(&f).unwrap(),
+            );
+            assert!(a == b, "{}: HT {k} lanes differ from scalar", sc.name());
+        }
+    }
+    println!("lanes backend: {}", mlab::lanes::BACKEND);
+}
