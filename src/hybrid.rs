@@ -187,10 +187,11 @@ pub(crate) fn tail_lanes<F: FloatLanes>(sums: [F::U; 3], alpha: F::U, count: F::
     let mean = s_a.div(n);
     let mean = F::select(mean.gt(one), one, mean);
     let x = one - mean;
-    // x^count by binary exponentiation over the 16 bits of the count.
+    // x^count by binary exponentiation over the bits of the count (at most 16); bits above
+    // the largest count of all lanes are zero and would leave `power` unchanged.
     let mut power = one;
     let mut base = x;
-    for bit in 0..16 {
+    for bit in 0..F::bit_length(count).min(16) {
         power = F::select(F::bit(count, bit), power * base, power);
         base = base * base;
     }

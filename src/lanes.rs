@@ -134,6 +134,8 @@ pub(crate) trait FloatLanes:
     fn div(self, other: Self) -> Self;
     /// Exact conversion of a small integer (below 2^24).
     fn from_u(n: Self::U) -> Self;
+    /// Number of significant bits of the largest lane of `n`.
+    fn bit_length(n: Self::U) -> u32;
 }
 
 impl FloatLanes for f32 {
@@ -166,6 +168,10 @@ impl FloatLanes for f32 {
     #[inline(always)]
     fn from_u(n: u32) -> Self {
         n as f32
+    }
+    #[inline(always)]
+    fn bit_length(n: u32) -> u32 {
+        u32::BITS - n.leading_zeros()
     }
 }
 
@@ -200,6 +206,10 @@ impl FloatLanes for f32x8 {
     #[inline(always)]
     fn from_u(n: u32x8) -> Self {
         cast::<u32x8, i32x8>(n).round_float()
+    }
+    #[inline(always)]
+    fn bit_length(n: u32x8) -> u32 {
+        u32::BITS - n.to_array().iter().fold(0, |m, &x| m | x).leading_zeros()
     }
 }
 
@@ -551,11 +561,34 @@ pub struct ResolvedLanes {
     pub transmittance: [f32; LANES],
 }
 
+/// Where pixel `p` of a span sits in the registers of the resolve: the 8 row words are
+/// packed without a shuffle as `(a & LO) | (b << 32)`, which orders the pixels
+/// `[0, 4, 1, 5, 2, 6, 3, 7]`. Every resolve step is per lane, so the order only matters when
+/// the results are written out.
+const POSITION: [usize; LANES] = [0, 2, 4, 6, 1, 3, 5, 7];
+
+/// `word0` of 8 rows (or tails) in one register, pixels in [`POSITION`] order.
+#[inline(always)]
+fn words0(r: Rows8) -> u32x8 {
+    (r.a & LO) | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.b) << 32)
+}
+
+/// `word1` of 8 rows (or tails) in one register, pixels in [`POSITION`] order.
+#[inline(always)]
+fn words1(r: Rows8) -> u32x8 {
+    cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.a) >> 32) | (r.b & HI)
+}
+
+/// Back to pixel order.
+#[inline(always)]
+fn unpermute<T: Copy>(x: [T; LANES]) -> [T; LANES] {
+    core::array::from_fn(|p| x[POSITION[p]])
+}
+
 /// Color and transmittance bytes of one layer of 8 rows, as exact f32 (`[R, G, B, T]`).
 #[inline(always)]
 fn layer_bytes(layer: &[Row; LANES]) -> [f32x8; 4] {
-    let w: [u32; 16] = cast(*layer);
-    let rgbt = u32x8::new([w[0], w[2], w[4], w[6], w[8], w[10], w[12], w[14]]);
+    let rgbt = words0(Rows8::load(layer));
     let byte = u32x8::splat(0xff);
     [rgbt & byte, (rgbt >> 8) & byte, (rgbt >> 16) & byte, rgbt >> 24].map(f32x8::from_u)
 }
@@ -570,21 +603,27 @@ pub fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> ResolvedLanes {
 /// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
 #[inline]
 pub fn hybrid_resolve<const K: usize>(span: &HybridSpan<K>) -> ResolvedLanes {
-    let head = crate::resolve::resolve_layers(span.head.iter().map(layer_bytes));
-    let w: [u32; 16] = cast(span.tails);
-    let w0 = u32x8::new([w[0], w[2], w[4], w[6], w[8], w[10], w[12], w[14]]);
-    let w1 = u32x8::new([w[1], w[3], w[5], w[7], w[9], w[11], w[13], w[15]]);
-    let field = u32x8::splat(0x3ff);
-    let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
-    let (color, t) = crate::hybrid::resolve_lanes::<f32x8>(head, sums, w1 & u32x8::splat(0xffff), w1 >> 16);
+    let (color, t) = hybrid_resolve_regs(span);
     ResolvedLanes::from_lanes(color, t)
 }
 
+/// The HT resolve in registers, pixels in [`POSITION`] order.
+#[inline(always)]
+fn hybrid_resolve_regs<const K: usize>(span: &HybridSpan<K>) -> ([f32x8; 3], f32x8) {
+    let head = crate::resolve::resolve_layers(span.head.iter().map(layer_bytes));
+    let tails = Rows8::load_tails(&span.tails);
+    let (w0, w1) = (words0(tails), words1(tails));
+    let field = u32x8::splat(0x3ff);
+    let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
+    crate::hybrid::resolve_lanes::<f32x8>(head, sums, w1 & u32x8::splat(0xffff), w1 >> 16)
+}
+
 impl ResolvedLanes {
+    /// From registers in [`POSITION`] order.
     fn from_lanes(color: [f32x8; 3], t: f32x8) -> ResolvedLanes {
         ResolvedLanes {
-            color: color.map(|c| c.to_array()),
-            transmittance: t.to_array(),
+            color: color.map(|c| unpermute(c.to_array())),
+            transmittance: unpermute(t.to_array()),
         }
     }
 
@@ -605,19 +644,37 @@ impl ResolvedLanes {
 
     /// The 8 pixels as RGBA8 ([`crate::to_rgba8`] per lane), computed in lanes.
     pub fn rgba8(&self, background: Background) -> [[u8; 4]; LANES] {
-        let c = self.color.map(f32x8::new);
-        let t = f32x8::new(self.transmittance);
-        let rgba: [f32x8; 4] = match background {
-            Background::Opaque(bg) => {
-                let bg = bg.to_array().map(f32x8::splat);
-                [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t, f32x8::ONE]
-            }
-            Background::Transparent => [c[0], c[1], c[2], f32x8::ONE - t],
-        };
-        let q = rgba.map(crate::resolve::to_unorm8_lanes);
-        let packed: [u32; LANES] = cast(q[0] | (q[1] << 8) | (q[2] << 16) | (q[3] << 24));
-        packed.map(u32::to_le_bytes)
+        rgba8_lanes(self.color.map(f32x8::new), f32x8::new(self.transmittance), background)
     }
+}
+
+/// [`crate::to_rgba8`] of [`Resolved::pixel`] for 8 lanes; the output keeps the lane order.
+#[inline(always)]
+fn rgba8_lanes(c: [f32x8; 3], t: f32x8, background: Background) -> [[u8; 4]; LANES] {
+    let rgba: [f32x8; 4] = match background {
+        Background::Opaque(bg) => {
+            let bg = bg.to_array().map(f32x8::splat);
+            [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t, f32x8::ONE]
+        }
+        Background::Transparent => [c[0], c[1], c[2], f32x8::ONE - t],
+    };
+    let q = rgba.map(crate::resolve::to_unorm8_lanes);
+    let packed: [u32; LANES] = cast(q[0] | (q[1] << 8) | (q[2] << 16) | (q[3] << 24));
+    packed.map(u32::to_le_bytes)
+}
+
+/// [`mlab_resolve`] straight to RGBA8, without leaving the registers until the end.
+#[inline]
+pub fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
+    let (color, t) = crate::resolve::resolve_layers(span.iter().map(layer_bytes));
+    unpermute(rgba8_lanes(color, t, background))
+}
+
+/// [`hybrid_resolve`] straight to RGBA8.
+#[inline]
+pub fn hybrid_resolve_rgba8<const K: usize>(span: &HybridSpan<K>, background: Background) -> [[u8; 4]; LANES] {
+    let (color, t) = hybrid_resolve_regs(span);
+    unpermute(rgba8_lanes(color, t, background))
 }
 
 /// The same span in the per-pixel arrangement: `[pixel][row]`.

@@ -5,8 +5,9 @@
 //! A_pixel  = A_opaque * prod_i T_i + A_transp     (Eq. 6)
 //! ```
 //!
-//! Evaluated in f32 in one fixed order (per row: `a += A_j * v`, then `v *= T_j`, where
-//! a byte `b` becomes `b as f32 * (1/255)`), with separate multiplies and adds, never FMA.
+//! Evaluated in f32 in one fixed order (per row, with `v` the visibility so far and bytes
+//! as exact f32: `w = v * (1/255)`, `a += byte * w`, `v = T_byte * w`), with separate
+//! multiplies and adds, never FMA.
 //! The lane kernels evaluate the same expression tree, so their pixels are bit-identical.
 
 use glam::{Vec3, Vec4};
@@ -90,16 +91,17 @@ pub(crate) fn row_bytes(row: &Row) -> [f32; 4] {
 }
 
 /// Eq. 5, written once for every lane width (`f32` or `f32x8`), over layers given as byte
-/// values `[R, G, B, T]` front to back: per layer `a += (byte * INV255) * v`, then
-/// `v *= T * INV255`.
+/// values `[R, G, B, T]` front to back. Per layer, with `v` the visibility so far:
+/// `w = v * INV255`, `a += byte * w` per channel, then `v = T * w`.
 #[inline(always)]
 pub(crate) fn resolve_layers<F: FloatLanes>(layers: impl Iterator<Item = [F; 4]>) -> ([F; 3], F) {
     let inv = F::splat(INV255);
     let mut a = [F::splat(0.0); 3];
     let mut v = F::splat(1.0);
     for [r, g, b, t] in layers {
-        a = [a[0] + r * inv * v, a[1] + g * inv * v, a[2] + b * inv * v];
-        v = v * (t * inv);
+        let w = v * inv;
+        a = [a[0] + r * w, a[1] + g * w, a[2] + b * w];
+        v = t * w;
     }
     (a, v)
 }

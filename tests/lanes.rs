@@ -83,6 +83,14 @@ fn check_mlab<const M: usize>(initial: &[[Row; M]; LANES], stream: &[Step]) -> R
         );
     }
     let want = pixels.map(|p| resolve_rows(&p));
+    for bg in BACKGROUNDS {
+        prop_assert_eq!(
+            lanes::mlab_resolve_rgba8(&span, bg),
+            want.map(|r| to_rgba8(r.pixel(bg))),
+            "M={} rgba8",
+            M
+        );
+    }
     check_resolved(&lanes::mlab_resolve(&span), &want)
 }
 
@@ -105,6 +113,14 @@ fn check_hybrid<const K: usize>(initial: &HybridSpan<K>, stream: &[Step]) -> Res
         prop_assert_eq!(span.tails, tails, "K={} tails", K);
     }
     let want: [mlab::Resolved; LANES] = core::array::from_fn(|l| hybrid::resolve(&heads[l], tails[l]));
+    for bg in BACKGROUNDS {
+        prop_assert_eq!(
+            lanes::hybrid_resolve_rgba8(&span, bg),
+            want.map(|r| to_rgba8(r.pixel(bg))),
+            "K={} rgba8",
+            K
+        );
+    }
     check_resolved(&lanes::hybrid_resolve(&span), &want)
 }
 

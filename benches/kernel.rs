@@ -1,0 +1,303 @@
+//! Criterion benches for the kernel (throughput in fragments or pixels).
+//!
+//! `cargo bench --bench kernel` (default target, wide on SSE2), and
+//! `CARGO_TARGET_DIR=target-v3 RUSTFLAGS="-C target-cpu=x86-64-v3" cargo bench --bench kernel` (AVX2).
+//! Results and analysis: docs/performance.md.
+//!
+//! Target: 128 x 128 pixels (16384 pixels; 512 KiB of rows at M = 4). Streams (same
+//! fragments for scalar and lanes, generated once from a fixed seed):
+//! - `random`: 8192 span operations, each on a random 8-pixel span with 8 random fragments
+//!   (random depth, so every pixel sees its fragments in random depth order);
+//! - `coherent`: random rectangles (primitives) scanned line by line in 8-pixel spans, with
+//!   partial masks at the rectangle edges, as a rasterizer emits them.
+//!
+//! The blending arrays are not cleared between iterations: after the first pass every array
+//! is full and every insert merges (the steady state of a heavy scene).
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
+use mlab::{Background, Row, Tail, hybrid, mlab as listing1, resolve_rows, to_rgba8};
+use std::hint::black_box;
+use wide::{u8x32, u16x16, u32x8};
+
+const W: usize = 128;
+const H: usize = 128;
+const SPANS: usize = W * H / LANES;
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// One span operation: span index, one row per lane, coverage mask.
+#[derive(Clone, Copy)]
+struct Step {
+    span: usize,
+    rows: [Row; LANES],
+    mask: u8,
+}
+
+fn fragment_row(rng: &mut Rng, depth: f32) -> Row {
+    let alpha = 0.1 + 0.8 * rng.unit();
+    let c = mlab::glam::Vec3::new(rng.unit(), rng.unit(), rng.unit());
+    mlab::Fragment::straight(c, alpha, depth).expect("valid").row()
+}
+
+fn random_stream() -> Vec<Step> {
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    (0..8192)
+        .map(|_| {
+            let span = (rng.next() % SPANS as u64) as usize;
+            let rows = core::array::from_fn(|_| {
+                let z = 100.0 * rng.unit();
+                fragment_row(&mut rng, z)
+            });
+            Step { span, rows, mask: 0xff }
+        })
+        .collect()
+}
+
+fn coherent_stream() -> Vec<Step> {
+    let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+    let mut steps = Vec::new();
+    while steps.len() < 8192 {
+        let (x0, y0) = ((rng.next() % W as u64) as usize, (rng.next() % H as u64) as usize);
+        let (w, h) = (1 + (rng.next() % 48) as usize, 1 + (rng.next() % 24) as usize);
+        let z0 = 100.0 * rng.unit();
+        let row = fragment_row(&mut rng, z0);
+        for y in y0..(y0 + h).min(H) {
+            let x1 = (x0 + w).min(W);
+            let mut sx = x0 / LANES * LANES;
+            while sx < x1 {
+                let mask = (0..LANES)
+                    .filter(|l| (x0..x1).contains(&(sx + l)))
+                    .fold(0u8, |m, l| m | 1 << l);
+                // A slight depth gradient along x, as a sloped primitive.
+                let rows =
+                    core::array::from_fn(|l| Row::new(row.color(), row.transmittance(), z0 + 0.01 * (sx + l) as f32));
+                steps.push(Step {
+                    span: (y * W + sx) / LANES,
+                    rows,
+                    mask,
+                });
+                sx += LANES;
+            }
+        }
+    }
+    steps
+}
+
+fn fragments(stream: &[Step]) -> u64 {
+    stream.iter().map(|s| s.mask.count_ones() as u64).sum()
+}
+
+fn mlab_scalar<const M: usize>(pixels: &mut [[Row; M]], stream: &[Step]) {
+    for s in stream {
+        for (lane, row) in s.rows.iter().enumerate() {
+            if s.mask & (1 << lane) != 0 {
+                listing1::insert(&mut pixels[s.span * LANES + lane], *row);
+            }
+        }
+    }
+}
+
+fn mlab_lanes<const M: usize>(spans: &mut [MlabSpan<M>], stream: &[Step]) {
+    for s in stream {
+        lanes::mlab_insert(&mut spans[s.span], &s.rows, s.mask);
+    }
+}
+
+/// The alternative arrangement: lanes over pixel-major storage, transposing the span's
+/// rows to layer-major and back around every insert.
+fn mlab_lanes_pixel_major<const M: usize>(pixels: &mut [[Row; M]], stream: &[Step]) {
+    for s in stream {
+        let chunk: &mut [[Row; M]; LANES] = (&mut pixels[s.span * LANES..(s.span + 1) * LANES])
+            .try_into()
+            .expect("8 pixels");
+        let mut span = lanes::from_pixel_major(chunk);
+        lanes::mlab_insert(&mut span, &s.rows, s.mask);
+        *chunk = lanes::to_pixel_major(&span);
+    }
+}
+
+fn hybrid_scalar<const K: usize>(pixels: &mut [([Row; K], Tail)], stream: &[Step]) {
+    for s in stream {
+        for (lane, row) in s.rows.iter().enumerate() {
+            if s.mask & (1 << lane) != 0 {
+                let (head, tail) = &mut pixels[s.span * LANES + lane];
+                hybrid::insert(head, tail, *row);
+            }
+        }
+    }
+}
+
+fn hybrid_lanes<const K: usize>(spans: &mut [HybridSpan<K>], stream: &[Step]) {
+    for s in stream {
+        lanes::hybrid_insert(&mut spans[s.span], &s.rows, s.mask);
+    }
+}
+
+/// Baseline: unsorted OVER of the same fragments into an RGBA8 buffer (premultiplied,
+/// exact unorm8 like the merge): `dst = src + round(dst * (255 - src.a) / 255)` per byte.
+fn over_pixel(src: u32, dst: u32) -> u32 {
+    let inv = 255 - (src >> 24);
+    let s = src.to_le_bytes();
+    let d = dst.to_le_bytes();
+    let mut o = [0u8; 4];
+    for c in 0..4 {
+        o[c] = s[c].saturating_add(mlab::unorm::div255(d[c] as u32 * inv) as u8);
+    }
+    u32::from_le_bytes(o)
+}
+
+/// RGBA8 source pixels of a stream (alpha byte = 255 - T).
+fn rgba_of(stream: &[Step]) -> Vec<[u32; LANES]> {
+    stream
+        .iter()
+        .map(|s| s.rows.map(|r| r.words()[0] ^ 0xff00_0000))
+        .collect()
+}
+
+fn over_scalar(buf: &mut [u32], stream: &[Step], src: &[[u32; LANES]]) {
+    for (s, px) in stream.iter().zip(src) {
+        for lane in 0..LANES {
+            if s.mask & (1 << lane) != 0 {
+                let d = &mut buf[s.span * LANES + lane];
+                *d = over_pixel(px[lane], *d);
+            }
+        }
+    }
+}
+
+fn over_lanes(buf: &mut [u32], stream: &[Step], src: &[[u32; LANES]]) {
+    let bytes02 = u32x8::splat(0x00ff_00ff);
+    let bits = u32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
+    for (s, px) in stream.iter().zip(src) {
+        let d8: &mut [u32; LANES] = (&mut buf[s.span * LANES..(s.span + 1) * LANES])
+            .try_into()
+            .expect("8 pixels");
+        let dst = u32x8::new(*d8);
+        let src = u32x8::new(*px);
+        let inv = u32x8::splat(255) - (src >> 24);
+        let inv2: u16x16 = bytemuck::cast(inv | (inv << 16));
+        let div = |x: u32x8| {
+            let y = x + u32x8::splat(0x0080_0080);
+            ((y + ((y >> 8) & bytes02)) >> 8) & bytes02
+        };
+        let pe = div(bytemuck::cast(bytemuck::cast::<_, u16x16>(dst & bytes02) * inv2));
+        let po = div(bytemuck::cast(bytemuck::cast::<_, u16x16>((dst >> 8) & bytes02) * inv2));
+        let out: u32x8 = bytemuck::cast(bytemuck::cast::<_, u8x32>(src).saturating_add(bytemuck::cast(pe | (po << 8))));
+        let on = (u32x8::splat(s.mask as u32) & bits).simd_eq(bits);
+        *d8 = on.select(out, dst).to_array();
+    }
+}
+
+macro_rules! mlab_group {
+    ($g:expr, $stream:expr, $($m:literal),*) => {$(
+        {
+            let mut pixels = vec![[Row::EMPTY; $m]; W * H];
+            $g.bench_function(BenchmarkId::new("mlab_scalar", $m), |b| b.iter(|| mlab_scalar::<$m>(&mut pixels, black_box($stream))));
+            let mut spans = vec![[[Row::EMPTY; LANES]; $m]; SPANS];
+            $g.bench_function(BenchmarkId::new("mlab_lanes", $m), |b| b.iter(|| mlab_lanes::<$m>(&mut spans, black_box($stream))));
+        }
+    )*};
+}
+
+macro_rules! hybrid_group {
+    ($g:expr, $stream:expr, $($k:literal),*) => {$(
+        {
+            let mut pixels = vec![([Row::EMPTY; $k], Tail::EMPTY); W * H];
+            $g.bench_function(BenchmarkId::new("ht_scalar", $k), |b| b.iter(|| hybrid_scalar::<$k>(&mut pixels, black_box($stream))));
+            let mut spans = vec![HybridSpan::<$k>::new(); SPANS];
+            $g.bench_function(BenchmarkId::new("ht_lanes", $k), |b| b.iter(|| hybrid_lanes::<$k>(&mut spans, black_box($stream))));
+        }
+    )*};
+}
+
+fn insert(c: &mut Criterion) {
+    println!("mlab lanes backend: {}", lanes::BACKEND);
+    for (name, stream) in [
+        ("insert_random", random_stream()),
+        ("insert_coherent", coherent_stream()),
+    ] {
+        let src = rgba_of(&stream);
+        let mut g = c.benchmark_group(name);
+        g.throughput(Throughput::Elements(fragments(&stream)));
+        let mut buf = vec![0u32; W * H];
+        g.bench_function("over_rgba8_scalar", |b| {
+            b.iter(|| over_scalar(&mut buf, black_box(&stream), &src))
+        });
+        g.bench_function("over_rgba8_lanes", |b| {
+            b.iter(|| over_lanes(&mut buf, black_box(&stream), &src))
+        });
+        mlab_group!(g, &stream, 1, 2, 4, 8);
+        hybrid_group!(g, &stream, 1, 3, 7);
+        let mut pixels = vec![[Row::EMPTY; 4]; W * H];
+        g.bench_function(BenchmarkId::new("mlab_lanes_pixel_major", 4), |b| {
+            b.iter(|| mlab_lanes_pixel_major::<4>(&mut pixels, black_box(&stream)))
+        });
+        g.finish();
+    }
+}
+
+fn resolve(c: &mut Criterion) {
+    let stream = random_stream();
+    let mut pixels = vec![[Row::EMPTY; 4]; W * H];
+    mlab_scalar::<4>(&mut pixels, &stream);
+    let spans: Vec<MlabSpan<4>> = pixels
+        .chunks_exact(LANES)
+        .map(|c| lanes::from_pixel_major(c.try_into().expect("8 pixels")))
+        .collect();
+    let bg = Background::Opaque(mlab::glam::Vec3::new(0.2, 0.3, 0.4));
+    let mut out = vec![[0u8; 4]; W * H];
+    let mut g = c.benchmark_group("resolve_rgba8");
+    g.throughput(Throughput::Elements((W * H) as u64));
+    g.bench_function(BenchmarkId::new("mlab_scalar", 4), |b| {
+        b.iter(|| {
+            for (o, p) in out.iter_mut().zip(black_box(&pixels)) {
+                *o = to_rgba8(resolve_rows(p).pixel(bg));
+            }
+        })
+    });
+    g.bench_function(BenchmarkId::new("mlab_lanes", 4), |b| {
+        b.iter(|| {
+            for (o, s) in out.chunks_exact_mut(LANES).zip(black_box(&spans)) {
+                o.copy_from_slice(&lanes::mlab_resolve_rgba8(s, bg));
+            }
+        })
+    });
+    let mut hp = vec![([Row::EMPTY; 3], Tail::EMPTY); W * H];
+    hybrid_scalar::<3>(&mut hp, &stream);
+    let mut hs = vec![HybridSpan::<3>::new(); SPANS];
+    hybrid_lanes::<3>(&mut hs, &stream);
+    g.bench_function(BenchmarkId::new("ht_scalar", 3), |b| {
+        b.iter(|| {
+            for (o, (h, t)) in out.iter_mut().zip(black_box(&hp)) {
+                *o = to_rgba8(hybrid::resolve(h, *t).pixel(bg));
+            }
+        })
+    });
+    g.bench_function(BenchmarkId::new("ht_lanes", 3), |b| {
+        b.iter(|| {
+            for (o, s) in out.chunks_exact_mut(LANES).zip(black_box(&hs)) {
+                o.copy_from_slice(&lanes::hybrid_resolve_rgba8(s, bg));
+            }
+        })
+    });
+    g.finish();
+}
+
+criterion_group! {
+    name = benches;
+    config = Criterion::default().warm_up_time(std::time::Duration::from_millis(500)).measurement_time(std::time::Duration::from_secs(2)).sample_size(30);
+    targets = insert, resolve
+}
+criterion_main!(benches);
