@@ -228,6 +228,13 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
         Ok(MlabFramebuffer { pixels, dims })
     }
 
+    /// [`new`](Self::new), then [`clear`](Self::clear).
+    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(storage, width, height)?;
+        fb.clear();
+        Ok(fb)
+    }
+
     fn rows_flat(&self) -> &[[Row; M]] {
         self.pixels
     }
@@ -306,11 +313,21 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
     }
 
     /// A view over `storage`, which must hold exactly `width * height * (K + 1)` rows.
-    /// Contents are kept; call [`clear`](Self::clear) for a new frame.
+    /// Contents are kept. **Storage filled with [`Row::EMPTY`] is not a cleared HT
+    /// framebuffer**: the tail slots would hold an empty row's bytes, which are not an empty
+    /// [`Tail`]. Use [`new_cleared`](Self::new_cleared) (or [`clear`](Self::clear)) to start a
+    /// frame.
     pub fn new(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
         let dims = Dims { width, height };
         dims.check_storage(K + 1, storage.len())?;
         Ok(HybridFramebuffer { rows: storage, dims })
+    }
+
+    /// [`new`](Self::new), then [`clear`](Self::clear): the way to start a frame.
+    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(storage, width, height)?;
+        fb.clear();
+        Ok(fb)
     }
 
     fn rows_flat(&self) -> &[Row] {

@@ -438,13 +438,25 @@ pub fn mlab_insert<const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], 
 /// Listing 2 on 8 pixels. Byte-identical to [`crate::hybrid::insert`] on each lane.
 #[inline]
 pub fn hybrid_insert<const K: usize>(span: &mut HybridSpan<K>, rows: &[Row; LANES], mask: u8) {
-    let mut head: [Rows8; K] = span.head.map(|layer| Rows8::load(&layer));
-    let mut tail = Rows8::load_tails(&span.tails);
-    crate::hybrid::insert_lanes(&mut head, &mut tail, Rows8::load(rows), Mask8::from_bits(mask));
-    for (layer, r) in span.head.iter_mut().zip(head) {
+    hybrid_insert_parts(&mut span.head, &mut span.tails, rows, mask);
+}
+
+/// [`hybrid_insert`] on a span stored as separate head layers and tails (as in a
+/// [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer)).
+#[inline]
+pub fn hybrid_insert_parts<const K: usize>(
+    head: &mut [[Row; LANES]; K],
+    tails: &mut [Tail; LANES],
+    rows: &[Row; LANES],
+    mask: u8,
+) {
+    let mut h: [Rows8; K] = head.map(|layer| Rows8::load(&layer));
+    let mut t = Rows8::load_tails(tails);
+    crate::hybrid::insert_lanes(&mut h, &mut t, Rows8::load(rows), Mask8::from_bits(mask));
+    for (layer, r) in head.iter_mut().zip(h) {
         *layer = r.store();
     }
-    span.tails = tail.store_tails();
+    *tails = t.store_tails();
 }
 
 /// Eight fragments, structure of arrays (premultiplied color unless quantized with
@@ -603,15 +615,15 @@ pub fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> ResolvedLanes {
 /// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
 #[inline]
 pub fn hybrid_resolve<const K: usize>(span: &HybridSpan<K>) -> ResolvedLanes {
-    let (color, t) = hybrid_resolve_regs(span);
+    let (color, t) = hybrid_resolve_regs(&span.head, &span.tails);
     ResolvedLanes::from_lanes(color, t)
 }
 
 /// The HT resolve in registers, pixels in [`POSITION`] order.
 #[inline(always)]
-fn hybrid_resolve_regs<const K: usize>(span: &HybridSpan<K>) -> ([f32x8; 3], f32x8) {
-    let head = crate::resolve::resolve_layers(span.head.iter().map(layer_bytes));
-    let tails = Rows8::load_tails(&span.tails);
+fn hybrid_resolve_regs<const K: usize>(head: &[[Row; LANES]; K], tails: &[Tail; LANES]) -> ([f32x8; 3], f32x8) {
+    let head = crate::resolve::resolve_layers(head.iter().map(layer_bytes));
+    let tails = Rows8::load_tails(tails);
     let (w0, w1) = (words0(tails), words1(tails));
     let field = u32x8::splat(0x3ff);
     let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
@@ -673,8 +685,25 @@ pub fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Backgr
 /// [`hybrid_resolve`] straight to RGBA8.
 #[inline]
 pub fn hybrid_resolve_rgba8<const K: usize>(span: &HybridSpan<K>, background: Background) -> [[u8; 4]; LANES] {
-    let (color, t) = hybrid_resolve_regs(span);
+    hybrid_resolve_parts_rgba8(&span.head, &span.tails, background)
+}
+
+/// [`hybrid_resolve_rgba8`] on separate head layers and tails.
+#[inline]
+pub fn hybrid_resolve_parts_rgba8<const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[Tail; LANES],
+    background: Background,
+) -> [[u8; 4]; LANES] {
+    let (color, t) = hybrid_resolve_regs(head, tails);
     unpermute(rgba8_lanes(color, t, background))
+}
+
+/// [`hybrid_resolve`] on separate head layers and tails.
+#[inline]
+pub fn hybrid_resolve_parts<const K: usize>(head: &[[Row; LANES]; K], tails: &[Tail; LANES]) -> ResolvedLanes {
+    let (color, t) = hybrid_resolve_regs(head, tails);
+    ResolvedLanes::from_lanes(color, t)
 }
 
 /// The same span in the per-pixel arrangement: `[pixel][row]`.

@@ -46,6 +46,7 @@ pub mod lanes;
 pub mod mlab;
 pub mod resolve;
 pub mod row;
+pub mod spans;
 pub mod unorm;
 
 pub use fragment::{Fragment, FragmentError};
@@ -54,6 +55,7 @@ pub use hybrid::{Hybrid, Tail};
 pub use mlab::BlendingArray;
 pub use resolve::{Background, Resolved, resolve_rows, to_rgba8, to_rgba16f};
 pub use row::Row;
+pub use spans::{HybridSpanFramebuffer, SpanFramebuffer};
 
 pub use glam;
 pub use half;

@@ -1,0 +1,583 @@
+//! Framebuffers in the lanes' arrangement: 8-pixel spans, layer-major.
+//!
+//! Each line of `width` pixels is cut into `ceil(width / 8)` spans of 8 pixels. A span of an
+//! MLAB framebuffer is `M` layers of 8 rows (`[[Row; 8]; M]`, layer `j` of the 8 pixels is
+//! 64 contiguous bytes); a span of an HT framebuffer is `K` head layers and then the 8 tails
+//! (in 8 row-sized slots). Spans follow each other along the line, lines top to bottom:
+//!
+//! ```text
+//! row index of (x, y, layer j) = ((y * spans_per_line + x / 8) * R + j) * 8 + x % 8
+//! ```
+//!
+//! with `R = M` (MLAB) or `K + 1` (HT). Lanes past the right edge (when `width % 8 != 0`) are
+//! padding: kept empty by [`clear`](SpanFramebuffer::clear), never written by an insert.
+//! In this arrangement the lane kernels load and store whole registers; `docs/performance.md`
+//! measures it against the pixel-major [`MlabFramebuffer`](crate::MlabFramebuffer) (which
+//! needs a transpose around every span insert). [`SpanFramebuffer::to_pixel_major`] and
+//! [`SpanFramebuffer::from_pixel_major`] convert losslessly between the two.
+//!
+//! Span operations take the pixel `(x, y)` of lane 0 and a mask; lane `i` is the pixel
+//! `(x + i, y)`. `x` need not be a multiple of 8 (the span is then split across two stored
+//! spans), and a lane whose pixel is outside the framebuffer must be off in the mask
+//! (otherwise [`FramebufferError::OutOfBounds`] is returned and nothing changes).
+//!
+//! ```
+//! use mlab::lanes::FragmentLanes;
+//! use mlab::{Background, Row, SpanFramebuffer};
+//! let (w, h) = (13, 2); // not a multiple of 8: two spans per line, the second partial
+//! let mut storage = vec![Row::EMPTY; SpanFramebuffer::<4>::rows_needed(w, h)?];
+//! let mut fb = SpanFramebuffer::<4>::new_cleared(&mut storage, w, h)?;
+//! let frags = FragmentLanes { color: [[0.5; 8], [0.0; 8], [0.0; 8]], alpha: [0.5; 8], depth: [1.0; 8] };
+//! // Pixels 9..13 of line 1: the partial span at the right edge (lanes 0..4 on).
+//! let invalid = fb.insert_span_fragments(9, 1, &frags, 0b0000_1111)?;
+//! assert_eq!(invalid, 0);
+//! assert!(fb.insert_span_fragments(9, 1, &frags, 0b0001_1111).is_err()); // lane 4 is x = 13
+//! let mut out = vec![[0u8; 4]; (w * h) as usize];
+//! fb.resolve_rgba8(&mut out, Background::Opaque(mlab::glam::Vec3::ZERO))?;
+//! assert_eq!(out[13 + 9], [128, 0, 0, 255]);
+//! assert_eq!(out[13 + 8], [0, 0, 0, 255]);
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+use glam::Vec4;
+use half::f16;
+
+use crate::framebuffer::FramebufferError;
+use crate::hybrid::Tail;
+use crate::lanes::{self, FragmentLanes, LANES, MlabSpan};
+use crate::resolve::{Background, Resolved, to_rgba8, to_rgba16f};
+use crate::row::Row;
+
+/// Geometry shared by both span framebuffers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct SpanDims {
+    width: u32,
+    height: u32,
+    /// Spans per line: `ceil(width / 8)`.
+    spans: usize,
+}
+
+impl SpanDims {
+    fn new(width: u32, height: u32) -> SpanDims {
+        SpanDims {
+            width,
+            height,
+            spans: (width as usize).div_ceil(LANES),
+        }
+    }
+
+    /// Rows of storage for `rows_per_pixel` rows per pixel, or an overflow error.
+    fn rows_needed(self, rows_per_pixel: usize) -> Result<usize, FramebufferError> {
+        self.spans
+            .checked_mul(self.height as usize)
+            .and_then(|s| s.checked_mul(LANES))
+            .and_then(|s| s.checked_mul(rows_per_pixel))
+            .ok_or(FramebufferError::SizeOverflow)
+    }
+
+    fn out_of_bounds(self, x: u32, y: u32) -> FramebufferError {
+        FramebufferError::OutOfBounds {
+            x,
+            y,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
+    /// Span index and lane of pixel `(x, y)`.
+    fn locate(self, x: u32, y: u32) -> Result<(usize, usize), FramebufferError> {
+        if x >= self.width || y >= self.height {
+            return Err(self.out_of_bounds(x, y));
+        }
+        Ok((y as usize * self.spans + x as usize / LANES, x as usize % LANES))
+    }
+
+    /// The one or two stored spans touched by a span operation at `(x, y)` with `mask`:
+    /// `(span, shift, mask_in_first, mask_in_second)`. Lane `i` lands on lane `(i + shift) % 8`,
+    /// of the first span if `i + shift < 8`, of the next one otherwise.
+    fn split(self, x: u32, y: u32, mask: u8) -> Result<(usize, usize, u8, u8), FramebufferError> {
+        if y >= self.height {
+            return Err(self.out_of_bounds(x, y));
+        }
+        if mask == 0 {
+            return Ok((0, 0, 0, 0));
+        }
+        let last = x as u64 + 7 - mask.leading_zeros() as u64;
+        if last >= self.width as u64 {
+            return Err(self.out_of_bounds(last.min(u32::MAX as u64) as u32, y));
+        }
+        let shift = x as usize % LANES;
+        let span = y as usize * self.spans + x as usize / LANES;
+        let wide = (mask as u16) << shift;
+        Ok((span, shift, wide as u8, (wide >> 8) as u8))
+    }
+
+    fn check_output(self, len: usize) -> Result<(), FramebufferError> {
+        let expected = (self.width as usize)
+            .checked_mul(self.height as usize)
+            .ok_or(FramebufferError::SizeOverflow)?;
+        if len != expected {
+            return Err(FramebufferError::OutputLength { expected, actual: len });
+        }
+        Ok(())
+    }
+
+    /// Write the 8 lanes of each span (`resolve(span index)`) into a row-major output of
+    /// `width * height` pixels, dropping padding lanes.
+    fn write_spans<T: Copy>(
+        self,
+        out: &mut [T],
+        resolve: impl Fn(usize) -> [T; LANES],
+    ) -> Result<(), FramebufferError> {
+        self.check_output(out.len())?;
+        if self.width == 0 {
+            return Ok(());
+        }
+        for (y, line) in out.chunks_exact_mut(self.width as usize).enumerate() {
+            for (sx, o) in line.chunks_mut(LANES).enumerate() {
+                let px = resolve(y * self.spans + sx);
+                o.copy_from_slice(&px[..o.len()]);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Resolved lanes of nothing (only for spans that cannot exist: storage is checked).
+const CLEAR_LANES: lanes::ResolvedLanes = lanes::ResolvedLanes {
+    color: [[0.0; LANES]; 3],
+    transmittance: [1.0; LANES],
+};
+
+/// The lanes of a span insert, rotated so that lane `i` sits at `(i + shift) % 8`.
+fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
+    let mut r = *rows;
+    r.rotate_right(shift);
+    r
+}
+
+/// An MLAB framebuffer in 8-pixel layer-major spans over borrowed storage (see the
+/// [module docs](self) for the arrangement).
+#[derive(Debug)]
+pub struct SpanFramebuffer<'a, const M: usize> {
+    spans: &'a mut [MlabSpan<M>],
+    dims: SpanDims,
+}
+
+impl<'a, const M: usize> SpanFramebuffer<'a, M> {
+    /// Rows of storage for `width x height` pixels: `ceil(width / 8) * 8 * height * M`.
+    pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
+        SpanDims::new(width, height).rows_needed(M)
+    }
+
+    /// A view over `storage` ([`rows_needed`](Self::rows_needed) rows exactly). The contents
+    /// are kept (rows from a previous frame or a GPU buffer); use
+    /// [`new_cleared`](Self::new_cleared) to start a frame.
+    pub fn new(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let () = crate::mlab::AtLeastOne::<M>::OK;
+        let dims = SpanDims::new(width, height);
+        let expected = dims.rows_needed(M)?;
+        if storage.len() != expected {
+            return Err(FramebufferError::StorageLength {
+                expected,
+                actual: storage.len(),
+            });
+        }
+        let spans = bytemuck::try_cast_slice_mut(storage).map_err(|_| FramebufferError::StorageLength {
+            expected,
+            actual: expected,
+        })?;
+        Ok(SpanFramebuffer { spans, dims })
+    }
+
+    /// [`new`](Self::new), then [`clear`](Self::clear).
+    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(storage, width, height)?;
+        fb.clear();
+        Ok(fb)
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.dims.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.dims.height
+    }
+
+    /// Every row empty (padding lanes included).
+    pub fn clear(&mut self) {
+        self.spans.fill([[Row::EMPTY; LANES]; M]);
+    }
+
+    /// Insert one row per lane at pixels `(x + i, y)` for the lanes set in `mask`
+    /// (Listing 1 in lanes). Errors if a lane that is on lies outside the framebuffer.
+    #[inline]
+    pub fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
+        let (span, shift, m0, m1) = self.dims.split(x, y, mask)?;
+        let rows = if shift == 0 { *rows } else { rotate(rows, shift) };
+        if m0 != 0 {
+            if let Some(s) = self.spans.get_mut(span) {
+                lanes::mlab_insert(s, &rows, m0);
+            }
+        }
+        if m1 != 0 {
+            if let Some(s) = self.spans.get_mut(span + 1) {
+                lanes::mlab_insert(s, &rows, m1);
+            }
+        }
+        Ok(())
+    }
+
+    /// Validate, quantize and insert one fragment per lane; returns the lanes that were on
+    /// but invalid (left untouched). Coordinates are checked first, for every lane that is on.
+    #[inline]
+    pub fn insert_span_fragments(
+        &mut self,
+        x: u32,
+        y: u32,
+        fragments: &FragmentLanes,
+        mask: u8,
+    ) -> Result<u8, FramebufferError> {
+        self.dims.split(x, y, mask)?;
+        let q = fragments.quantize(mask);
+        self.insert_span(x, y, &q.rows, q.valid)?;
+        Ok(q.invalid)
+    }
+
+    /// Insert one quantized row at `(x, y)`.
+    pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        let (_, lane) = self.dims.locate(x, y)?;
+        self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
+    }
+
+    /// Insert one fragment at `(x, y)`.
+    pub fn insert(&mut self, x: u32, y: u32, fragment: &crate::Fragment) -> Result<(), FramebufferError> {
+        self.insert_row(x, y, fragment.row())
+    }
+
+    /// The blending array of pixel `(x, y)`.
+    pub fn pixel(&self, x: u32, y: u32) -> Result<[Row; M], FramebufferError> {
+        let (span, lane) = self.dims.locate(x, y)?;
+        let s = self.spans.get(span).ok_or(self.dims.out_of_bounds(x, y))?;
+        Ok(core::array::from_fn(|j| s[j][lane]))
+    }
+
+    /// Resolve one pixel.
+    pub fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+        self.pixel(x, y).map(|p| crate::resolve_rows(&p))
+    }
+
+    fn resolved_span(&self, i: usize) -> lanes::ResolvedLanes {
+        self.spans.get(i).map_or(CLEAR_LANES, lanes::mlab_resolve)
+    }
+
+    /// Resolve every pixel into RGBA8 (row-major, `width * height`), 8 lanes at a time.
+    pub fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
+        let clear = to_rgba8(Resolved::CLEAR.pixel(background));
+        self.dims.write_spans(out, |i| {
+            self.spans
+                .get(i)
+                .map_or([clear; LANES], |s| lanes::mlab_resolve_rgba8(s, background))
+        })
+    }
+
+    /// Resolve every pixel into f32 RGBA ([`Resolved::pixel`]).
+    pub fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
+        self.dims.write_spans(out, |i| self.resolved_span(i).pixels(background))
+    }
+
+    /// Resolve every pixel into RGBA16F.
+    pub fn resolve_rgba16f(&self, out: &mut [[f16; 4]], background: Background) -> Result<(), FramebufferError> {
+        self.dims
+            .write_spans(out, |i| self.resolved_span(i).pixels(background).map(to_rgba16f))
+    }
+
+    /// Copy into the pixel-major arrangement of [`MlabFramebuffer`](crate::MlabFramebuffer)
+    /// (`width * height * M` rows); padding lanes are dropped.
+    pub fn to_pixel_major(&self, out: &mut [Row]) -> Result<(), FramebufferError> {
+        let out: &mut [[Row; M]] = pixel_major_slice(out, self.dims, M)?;
+        self.dims.write_spans(out, |i| {
+            self.spans
+                .get(i)
+                .map_or([[Row::EMPTY; M]; LANES], lanes::to_pixel_major)
+        })
+    }
+
+    /// Overwrite from the pixel-major arrangement (`width * height * M` rows); padding lanes
+    /// become empty.
+    pub fn from_pixel_major(&mut self, pixels: &[Row]) -> Result<(), FramebufferError> {
+        let d = self.dims;
+        let expected = (d.width as usize) * (d.height as usize) * M;
+        let pixels: &[[Row; M]] = bytemuck::try_cast_slice(pixels)
+            .ok()
+            .filter(|p: &&[[Row; M]]| p.len() * M == expected)
+            .ok_or(FramebufferError::StorageLength {
+                expected,
+                actual: pixels.len(),
+            })?;
+        for (i, span) in self.spans.iter_mut().enumerate() {
+            let (y, sx) = (i / d.spans, (i % d.spans) * LANES);
+            let mut px = [[Row::EMPTY; M]; LANES];
+            for (lane, p) in px.iter_mut().enumerate() {
+                if sx + lane < d.width as usize {
+                    *p = pixels[y * d.width as usize + sx + lane];
+                }
+            }
+            *span = lanes::from_pixel_major(&px);
+        }
+        Ok(())
+    }
+
+    /// Split into bands of `lines` lines (the last one may be shorter), each a framebuffer of
+    /// its own over its part of the storage, so that threads can own them. Band `b` covers
+    /// lines `b * lines ..`; coordinates inside a band are relative to its first line.
+    /// `lines == 0` yields no band.
+    ///
+    /// ```
+    /// use mlab::{Row, SpanFramebuffer};
+    /// let mut storage = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(20, 10)?];
+    /// let mut fb = SpanFramebuffer::<2>::new_cleared(&mut storage, 20, 10)?;
+    /// let bands: Vec<_> = fb.bands_mut(4).collect();
+    /// assert_eq!(bands.iter().map(|b| b.height()).collect::<Vec<_>>(), [4, 4, 2]);
+    /// std::thread::scope(|s| {
+    ///     for mut band in bands {
+    ///         s.spawn(move || band.insert_row(19, 0, Row::new([9, 9, 9], 0, 1.0)));
+    ///     }
+    /// });
+    /// assert_eq!(fb.pixel(19, 8)?[0], Row::new([9, 9, 9], 0, 1.0));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = SpanFramebuffer<'_, M>> {
+        let d = self.dims;
+        let chunk = (d.spans * lines as usize).max(1);
+        let n = if lines == 0 || d.spans == 0 { 0 } else { usize::MAX };
+        self.spans.chunks_mut(chunk).take(n).map(move |spans| {
+            let height = (spans.len() / d.spans.max(1)) as u32;
+            SpanFramebuffer {
+                spans,
+                dims: SpanDims { height, ..d },
+            }
+        })
+    }
+
+    /// The storage as rows.
+    pub fn as_rows(&self) -> &[Row] {
+        bytemuck::cast_slice(self.spans)
+    }
+
+    /// The storage as bytes (8 per row).
+    pub fn as_bytes(&self) -> &[u8] {
+        bytemuck::cast_slice(self.spans)
+    }
+
+    /// The storage as native-endian `u32` words, two per row.
+    pub fn as_words(&self) -> &[u32] {
+        bytemuck::cast_slice(self.spans)
+    }
+}
+
+/// `out` as `width * height` pixels of `r` rows.
+fn pixel_major_slice<const M: usize>(
+    out: &mut [Row],
+    d: SpanDims,
+    r: usize,
+) -> Result<&mut [[Row; M]], FramebufferError> {
+    let expected = (d.width as usize) * (d.height as usize) * r;
+    let actual = out.len();
+    if actual != expected {
+        return Err(FramebufferError::StorageLength { expected, actual });
+    }
+    bytemuck::try_cast_slice_mut(out).map_err(|_| FramebufferError::StorageLength { expected, actual })
+}
+
+/// A Hybrid Transparency framebuffer in 8-pixel spans: per span, `K` head layers of 8 rows,
+/// then the 8 tails in 8 row-sized slots (see the [module docs](self)).
+#[derive(Debug)]
+pub struct HybridSpanFramebuffer<'a, const K: usize> {
+    rows: &'a mut [Row],
+    dims: SpanDims,
+}
+
+impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
+    const SPAN_ROWS: usize = (K + 1) * LANES;
+
+    /// Rows of storage: `ceil(width / 8) * 8 * height * (K + 1)`.
+    pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
+        SpanDims::new(width, height).rows_needed(K + 1)
+    }
+
+    /// A view over `storage` (exactly [`rows_needed`](Self::rows_needed) rows); contents
+    /// are kept. **Storage filled with [`Row::EMPTY`] is not a cleared HT framebuffer** (an
+    /// empty row's bytes are not an empty tail): use [`new_cleared`](Self::new_cleared).
+    pub fn new(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let dims = SpanDims::new(width, height);
+        let expected = dims.rows_needed(K + 1)?;
+        if storage.len() != expected {
+            return Err(FramebufferError::StorageLength {
+                expected,
+                actual: storage.len(),
+            });
+        }
+        Ok(HybridSpanFramebuffer { rows: storage, dims })
+    }
+
+    /// [`new`](Self::new), then [`clear`](Self::clear).
+    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(storage, width, height)?;
+        fb.clear();
+        Ok(fb)
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> u32 {
+        self.dims.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> u32 {
+        self.dims.height
+    }
+
+    /// Empty head rows and empty tails everywhere.
+    pub fn clear(&mut self) {
+        let empty_tail = Row::from_bytes(Tail::EMPTY.to_bytes());
+        for span in self.rows.chunks_exact_mut(Self::SPAN_ROWS) {
+            let (head, tails) = span.split_at_mut(K * LANES);
+            head.fill(Row::EMPTY);
+            tails.fill(empty_tail);
+        }
+    }
+
+    /// Head layers and tails of stored span `i`.
+    fn parts_mut(&mut self, i: usize) -> Option<(&mut [[Row; LANES]; K], &mut [Tail; LANES])> {
+        let span = self.rows.get_mut(i * Self::SPAN_ROWS..(i + 1) * Self::SPAN_ROWS)?;
+        let (head, tails) = span.split_at_mut(K * LANES);
+        let head: &mut [[Row; LANES]] = bytemuck::try_cast_slice_mut(head).ok()?;
+        let tails: &mut [Row; LANES] = tails.try_into().ok()?;
+        Some((head.try_into().ok()?, bytemuck::cast_mut(tails)))
+    }
+
+    fn parts(span: &[Row]) -> Option<(&[[Row; LANES]; K], &[Tail; LANES])> {
+        let (head, tails) = span.split_at_checked(K * LANES)?;
+        let head: &[[Row; LANES]] = bytemuck::try_cast_slice(head).ok()?;
+        let tails: &[Row; LANES] = tails.try_into().ok()?;
+        Some((head.try_into().ok()?, bytemuck::cast_ref(tails)))
+    }
+
+    /// Insert one row per lane at `(x + i, y)` for the lanes in `mask` (Listing 2 in lanes).
+    #[inline]
+    pub fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
+        let (span, shift, m0, m1) = self.dims.split(x, y, mask)?;
+        let rows = if shift == 0 { *rows } else { rotate(rows, shift) };
+        for (i, m) in [(span, m0), (span + 1, m1)] {
+            if m != 0 {
+                if let Some((head, tails)) = self.parts_mut(i) {
+                    lanes::hybrid_insert_parts(head, tails, &rows, m);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Validate, quantize and insert one fragment per lane; returns the invalid lanes.
+    #[inline]
+    pub fn insert_span_fragments(
+        &mut self,
+        x: u32,
+        y: u32,
+        fragments: &FragmentLanes,
+        mask: u8,
+    ) -> Result<u8, FramebufferError> {
+        self.dims.split(x, y, mask)?;
+        let q = fragments.quantize(mask);
+        self.insert_span(x, y, &q.rows, q.valid)?;
+        Ok(q.invalid)
+    }
+
+    /// Insert one quantized row at `(x, y)`.
+    pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        let (_, lane) = self.dims.locate(x, y)?;
+        self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
+    }
+
+    /// Insert one fragment at `(x, y)`.
+    pub fn insert(&mut self, x: u32, y: u32, fragment: &crate::Fragment) -> Result<(), FramebufferError> {
+        self.insert_row(x, y, fragment.row())
+    }
+
+    /// Head rows and tail of pixel `(x, y)`.
+    pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], Tail), FramebufferError> {
+        let (span, lane) = self.dims.locate(x, y)?;
+        let (head, tails) = self.span(span).ok_or(self.dims.out_of_bounds(x, y))?;
+        Ok((core::array::from_fn(|j| head[j][lane]), tails[lane]))
+    }
+
+    /// Resolve one pixel.
+    pub fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+        self.pixel(x, y).map(|(h, t)| crate::hybrid::resolve(&h, t))
+    }
+
+    fn span(&self, i: usize) -> Option<(&[[Row; LANES]; K], &[Tail; LANES])> {
+        self.rows
+            .get(i * Self::SPAN_ROWS..(i + 1) * Self::SPAN_ROWS)
+            .and_then(Self::parts)
+    }
+
+    fn resolved_span(&self, i: usize) -> lanes::ResolvedLanes {
+        self.span(i)
+            .map_or(CLEAR_LANES, |(h, t)| lanes::hybrid_resolve_parts(h, t))
+    }
+
+    /// Resolve every pixel into RGBA8, 8 lanes at a time.
+    pub fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
+        let clear = to_rgba8(Resolved::CLEAR.pixel(background));
+        self.dims.write_spans(out, |i| {
+            self.span(i).map_or([clear; LANES], |(h, t)| {
+                lanes::hybrid_resolve_parts_rgba8(h, t, background)
+            })
+        })
+    }
+
+    /// Resolve every pixel into f32 RGBA.
+    pub fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
+        self.dims.write_spans(out, |i| self.resolved_span(i).pixels(background))
+    }
+
+    /// Resolve every pixel into RGBA16F.
+    pub fn resolve_rgba16f(&self, out: &mut [[f16; 4]], background: Background) -> Result<(), FramebufferError> {
+        self.dims
+            .write_spans(out, |i| self.resolved_span(i).pixels(background).map(to_rgba16f))
+    }
+
+    /// Split into bands of `lines` lines, each a framebuffer over its part of the storage.
+    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = HybridSpanFramebuffer<'_, K>> {
+        let d = self.dims;
+        let chunk = (d.spans * lines as usize * Self::SPAN_ROWS).max(1);
+        let n = if lines == 0 || d.spans == 0 { 0 } else { usize::MAX };
+        self.rows.chunks_mut(chunk).take(n).map(move |rows| {
+            let height = (rows.len() / (d.spans * Self::SPAN_ROWS).max(1)) as u32;
+            HybridSpanFramebuffer {
+                rows,
+                dims: SpanDims { height, ..d },
+            }
+        })
+    }
+
+    /// The storage as rows (tail slots hold [`Tail`] bytes).
+    pub fn as_rows(&self) -> &[Row] {
+        self.rows
+    }
+
+    /// The storage as bytes.
+    pub fn as_bytes(&self) -> &[u8] {
+        bytemuck::cast_slice(self.rows)
+    }
+
+    /// The storage as native-endian `u32` words.
+    pub fn as_words(&self) -> &[u32] {
+        bytemuck::cast_slice(self.rows)
+    }
+}

@@ -1,0 +1,267 @@
+//! Span framebuffers (layer-major, lanes) against the pixel-major framebuffers (scalar),
+//! byte for byte: unaligned spans, partial spans at the right edge, widths that are not a
+//! multiple of 8, out-of-bounds lanes, bands, conversions.
+
+mod common;
+
+use mlab::glam::{Vec3, Vec4};
+use mlab::half::f16;
+use mlab::lanes::{FragmentLanes, LANES};
+use mlab::{
+    Background, FramebufferError, HybridFramebuffer, HybridSpanFramebuffer, MlabFramebuffer, Row, SpanFramebuffer,
+};
+use proptest::prelude::*;
+
+const BG: Background = Background::Opaque(Vec3::new(0.1, 0.2, 0.3));
+
+/// A span operation: lane-0 pixel, rows, mask (clipped to the framebuffer by the generator).
+type Op = (u32, u32, [Row; LANES], u8);
+
+fn ops(width: u32, height: u32) -> impl Strategy<Value = Vec<Op>> {
+    let row = prop_oneof![
+        4 => common::normal_fragment().prop_map(|f| f.row()),
+        1 => any::<u64>().prop_map(|b| Row::from_bytes(b.to_le_bytes())),
+    ];
+    prop::collection::vec((0..width, 0..height, prop::array::uniform8(row), any::<u8>()), 0..60).prop_map(move |v| {
+        v.into_iter()
+            .map(|(x, y, rows, mask)| {
+                // Keep only lanes inside the framebuffer.
+                let inside = (0..LANES)
+                    .filter(|&l| x + (l as u32) < width)
+                    .fold(0u8, |m, l| m | 1 << l);
+                (x, y, rows, mask & inside)
+            })
+            .collect()
+    })
+}
+
+fn check_mlab<const M: usize>(w: u32, h: u32, ops: &[Op]) -> Result<(), TestCaseError> {
+    let mut span_storage = vec![Row::EMPTY; SpanFramebuffer::<M>::rows_needed(w, h).unwrap()];
+    let mut fb = SpanFramebuffer::<M>::new_cleared(&mut span_storage, w, h).unwrap();
+    let mut px_storage = vec![Row::EMPTY; MlabFramebuffer::<M>::rows_needed(w, h).unwrap()];
+    let mut reference = MlabFramebuffer::<M>::new_cleared(&mut px_storage, w, h).unwrap();
+    for &(x, y, rows, mask) in ops {
+        fb.insert_span(x, y, &rows, mask).unwrap();
+        for (l, row) in rows.iter().enumerate() {
+            if mask & (1 << l) != 0 {
+                reference.insert_row(x + l as u32, y, *row).unwrap();
+            }
+        }
+    }
+    let mut converted = vec![Row::EMPTY; px_storage_len(w, h, M)];
+    fb.to_pixel_major(&mut converted).unwrap();
+    prop_assert_eq!(&converted[..], reference.as_rows(), "w={} h={} M={}", w, h, M);
+    // Padding lanes stay empty.
+    for y in 0..h {
+        for x in w..w.div_ceil(8) * 8 {
+            let i = ((y as usize * w.div_ceil(8) as usize + x as usize / 8) * M) * 8 + x as usize % 8;
+            for j in 0..M {
+                prop_assert!(fb.as_rows()[i + j * 8].is_empty());
+            }
+        }
+    }
+    // Resolves equal bit for bit.
+    let n = (w * h) as usize;
+    let (mut a, mut b) = (vec![[0u8; 4]; n], vec![[0u8; 4]; n]);
+    fb.resolve_rgba8(&mut a, BG).unwrap();
+    reference.resolve_rgba8(&mut b, BG).unwrap();
+    prop_assert_eq!(&a, &b);
+    let (mut a, mut b) = (vec![Vec4::ZERO; n], vec![Vec4::ZERO; n]);
+    fb.resolve_into(&mut a, Background::Transparent).unwrap();
+    reference.resolve_into(&mut b, Background::Transparent).unwrap();
+    prop_assert_eq!(bits(&a), bits(&b));
+    let (mut a, mut b) = (vec![[f16::ZERO; 4]; n], vec![[f16::ZERO; 4]; n]);
+    fb.resolve_rgba16f(&mut a, BG).unwrap();
+    reference.resolve_rgba16f(&mut b, BG).unwrap();
+    prop_assert_eq!(
+        a.iter().map(|p| p.map(f16::to_bits)).collect::<Vec<_>>(),
+        b.iter().map(|p| p.map(f16::to_bits)).collect::<Vec<_>>()
+    );
+    // Round trip through the pixel-major arrangement.
+    let mut again = vec![Row::EMPTY; span_storage_len::<M>(w, h)];
+    let mut fb2 = SpanFramebuffer::<M>::new(&mut again, w, h).unwrap();
+    fb2.from_pixel_major(&converted).unwrap();
+    prop_assert_eq!(fb2.as_rows(), fb.as_rows());
+    Ok(())
+}
+
+fn px_storage_len(w: u32, h: u32, rows: usize) -> usize {
+    (w * h) as usize * rows
+}
+
+fn span_storage_len<const M: usize>(w: u32, h: u32) -> usize {
+    SpanFramebuffer::<M>::rows_needed(w, h).unwrap()
+}
+
+fn bits(v: &[Vec4]) -> Vec<[u32; 4]> {
+    v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+}
+
+fn check_hybrid<const K: usize>(w: u32, h: u32, ops: &[Op]) -> Result<(), TestCaseError> {
+    let mut span_storage = vec![Row::EMPTY; HybridSpanFramebuffer::<K>::rows_needed(w, h).unwrap()];
+    let mut fb = HybridSpanFramebuffer::<K>::new_cleared(&mut span_storage, w, h).unwrap();
+    let mut px_storage = vec![Row::EMPTY; HybridFramebuffer::<K>::rows_needed(w, h).unwrap()];
+    let mut reference = HybridFramebuffer::<K>::new_cleared(&mut px_storage, w, h).unwrap();
+    for &(x, y, rows, mask) in ops {
+        fb.insert_span(x, y, &rows, mask).unwrap();
+        for (l, row) in rows.iter().enumerate() {
+            if mask & (1 << l) != 0 {
+                reference.insert_row(x + l as u32, y, *row).unwrap();
+            }
+        }
+    }
+    for y in 0..h {
+        for x in 0..w {
+            prop_assert_eq!(
+                fb.pixel(x, y).unwrap(),
+                reference.pixel(x, y).unwrap(),
+                "K={} ({}, {})",
+                K,
+                x,
+                y
+            );
+        }
+    }
+    let n = (w * h) as usize;
+    let (mut a, mut b) = (vec![[0u8; 4]; n], vec![[0u8; 4]; n]);
+    fb.resolve_rgba8(&mut a, BG).unwrap();
+    reference.resolve_rgba8(&mut b, BG).unwrap();
+    prop_assert_eq!(&a, &b);
+    let (mut a, mut b) = (vec![Vec4::ZERO; n], vec![Vec4::ZERO; n]);
+    fb.resolve_into(&mut a, BG).unwrap();
+    reference.resolve_into(&mut b, BG).unwrap();
+    prop_assert_eq!(bits(&a), bits(&b));
+    Ok(())
+}
+
+fn size() -> impl Strategy<Value = (u32, u32)> {
+    (prop::sample::select(vec![1u32, 7, 8, 9, 13, 16, 17]), 1u32..4)
+}
+
+proptest! {
+    #[test]
+    fn span_framebuffers_equal_pixel_major_scalar(((w, h), ops) in size().prop_flat_map(|(w, h)| (Just((w, h)), ops(w, h)))) {
+        check_mlab::<1>(w, h, &ops)?;
+        check_mlab::<4>(w, h, &ops)?;
+        check_hybrid::<1>(w, h, &ops)?;
+        check_hybrid::<3>(w, h, &ops)?;
+    }
+
+    /// Inserting through bands (one per thread) gives the same storage as inserting into the whole.
+    #[test]
+    fn bands_equal_whole(((w, h), ops) in (prop::sample::select(vec![5u32, 8, 13]), 1u32..9).prop_flat_map(|(w, h)| (Just((w, h)), ops(w, h))), lines in 1u32..4) {
+        let mut whole = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(w, h).unwrap()];
+        let mut banded = whole.clone();
+        let mut fb = SpanFramebuffer::<2>::new_cleared(&mut whole, w, h).unwrap();
+        let mut fb2 = SpanFramebuffer::<2>::new_cleared(&mut banded, w, h).unwrap();
+        for &(x, y, rows, mask) in &ops {
+            fb.insert_span(x, y, &rows, mask).unwrap();
+        }
+        let mut bands: Vec<_> = fb2.bands_mut(lines).collect();
+        prop_assert_eq!(bands.len() as u32, h.div_ceil(lines));
+        for &(x, y, rows, mask) in &ops {
+            bands[(y / lines) as usize].insert_span(x, y % lines, &rows, mask).unwrap();
+        }
+        drop(bands);
+        prop_assert_eq!(fb.as_rows(), fb2.as_rows());
+
+        let mut hw = vec![Row::EMPTY; HybridSpanFramebuffer::<1>::rows_needed(w, h).unwrap()];
+        let mut hb = hw.clone();
+        let mut fb = HybridSpanFramebuffer::<1>::new_cleared(&mut hw, w, h).unwrap();
+        let mut fb2 = HybridSpanFramebuffer::<1>::new_cleared(&mut hb, w, h).unwrap();
+        for &(x, y, rows, mask) in &ops {
+            fb.insert_span(x, y, &rows, mask).unwrap();
+        }
+        let mut bands: Vec<_> = fb2.bands_mut(lines).collect();
+        for &(x, y, rows, mask) in &ops {
+            bands[(y / lines) as usize].insert_span(x, y % lines, &rows, mask).unwrap();
+        }
+        drop(bands);
+        prop_assert_eq!(fb.as_rows(), fb2.as_rows());
+    }
+}
+
+#[test]
+fn out_of_bounds_lanes_are_refused_and_change_nothing() {
+    let (w, h) = (13u32, 2u32);
+    let mut s = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(w, h).unwrap()];
+    let mut fb = SpanFramebuffer::<2>::new_cleared(&mut s, w, h).unwrap();
+    let rows = [Row::new([1, 2, 3], 100, 1.0); 8];
+    // x = 9: lanes 0..4 are pixels 9..12 (in), lane 4 is pixel 13 (out).
+    assert_eq!(
+        fb.insert_span(9, 0, &rows, 0b1_1111),
+        Err(FramebufferError::OutOfBounds {
+            x: 13,
+            y: 0,
+            width: 13,
+            height: 2
+        })
+    );
+    assert_eq!(
+        fb.insert_span(0, 2, &rows, 1),
+        Err(FramebufferError::OutOfBounds {
+            x: 0,
+            y: 2,
+            width: 13,
+            height: 2
+        })
+    );
+    assert_eq!(
+        fb.insert_span(u32::MAX, 0, &rows, 0x80),
+        Err(FramebufferError::OutOfBounds {
+            x: u32::MAX,
+            y: 0,
+            width: 13,
+            height: 2
+        })
+    );
+    assert!(fb.as_rows().iter().all(|r| r.is_empty()));
+    // A zero mask is fine anywhere on a valid line, and changes nothing.
+    fb.insert_span(u32::MAX, 1, &rows, 0).unwrap();
+    fb.insert_span(9, 0, &rows, 0b1111).unwrap();
+    assert_eq!(fb.pixel(12, 0).unwrap()[0], rows[0]);
+    // Invalid fragments: reported, untouched; coordinates checked first.
+    let mut frags = FragmentLanes {
+        color: [[0.5; 8]; 3],
+        alpha: [0.5; 8],
+        depth: [2.0; 8],
+    };
+    frags.depth[1] = f32::INFINITY;
+    frags.alpha[2] = 2.0;
+    assert_eq!(fb.insert_span_fragments(0, 1, &frags, 0xff), Ok(0b110));
+    assert!(fb.pixel(1, 1).unwrap()[0].is_empty());
+    assert!(!fb.pixel(0, 1).unwrap()[0].is_empty());
+    assert!(fb.insert_span_fragments(8, 1, &frags, 0xff).is_err());
+    // Wrong storage and output sizes.
+    let mut short = vec![Row::EMPTY; 3];
+    assert!(matches!(
+        SpanFramebuffer::<2>::new(&mut short, w, h),
+        Err(FramebufferError::StorageLength { .. })
+    ));
+    assert!(matches!(
+        HybridSpanFramebuffer::<2>::new(&mut short, w, h),
+        Err(FramebufferError::StorageLength { .. })
+    ));
+    assert_eq!(
+        SpanFramebuffer::<2>::rows_needed(u32::MAX, u32::MAX),
+        Err(FramebufferError::SizeOverflow)
+    );
+    let mut out = vec![[0u8; 4]; 5];
+    assert!(matches!(
+        fb.resolve_rgba8(&mut out, BG),
+        Err(FramebufferError::OutputLength {
+            expected: 26,
+            actual: 5
+        })
+    ));
+}
+
+#[test]
+fn hybrid_new_over_empty_rows_needs_clearing() {
+    // The trap reported by the lab: Row::EMPTY bytes are not an empty tail.
+    let mut s = vec![Row::EMPTY; HybridFramebuffer::<1>::rows_needed(1, 1).unwrap()];
+    let fb = HybridFramebuffer::<1>::new(&mut s, 1, 1).unwrap();
+    assert_ne!(fb.resolve(0, 0).unwrap(), mlab::Resolved::CLEAR);
+    let fb = HybridFramebuffer::<1>::new_cleared(&mut s, 1, 1).unwrap();
+    assert_eq!(fb.resolve(0, 0).unwrap(), mlab::Resolved::CLEAR);
+}
