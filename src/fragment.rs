@@ -101,10 +101,12 @@ fn check_color(color: Vec3) -> Result<(), FragmentError> {
     }
 }
 
+/// After the NaN checks: infinite color, then infinite depth (an infinite alpha is a range
+/// error, [`FragmentError::AlphaOutOfRange`]).
 #[inline]
-fn check_depth(depth: f32) -> Result<(), FragmentError> {
-    if depth.is_nan() {
-        Err(FragmentError::NanDepth)
+fn check_infinities(color: Vec3, depth: f32) -> Result<(), FragmentError> {
+    if color.to_array().iter().any(|v| v.is_infinite()) {
+        Err(FragmentError::InfiniteColor)
     } else if depth.is_infinite() {
         Err(FragmentError::InfiniteDepth)
     } else {
@@ -124,13 +126,14 @@ fn check_premultiplied(color: Vec3) -> Result<(), FragmentError> {
 impl Fragment {
     /// A fragment from premultiplied color (`color * alpha` already applied), alpha and depth.
     ///
-    /// Errors are checked in this order: NaN anywhere (depth, alpha, color), then
-    /// infinities, then ranges; the first one found is returned.
+    /// Errors are checked in this order, and the first one found is returned: NaN (depth,
+    /// alpha, color), then infinities (color, depth), then ranges (negative color, alpha
+    /// outside `[0, 1]`, premultiplied color above 1).
     pub fn premultiplied(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
         Self::check_nans(color, alpha, depth)?;
+        check_infinities(color, depth)?;
         check_color(color)?;
         check_alpha(alpha)?;
-        check_depth(depth)?;
         check_premultiplied(color)?;
         Ok(Fragment { color, alpha, depth })
     }
@@ -139,9 +142,9 @@ impl Fragment {
     /// `color * alpha` (one f32 multiply per channel), which must not exceed 1.
     pub fn straight(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
         Self::check_nans(color, alpha, depth)?;
+        check_infinities(color, depth)?;
         check_color(color)?;
         check_alpha(alpha)?;
-        check_depth(depth)?;
         let pre = color * alpha;
         check_premultiplied(pre)?;
         Ok(Fragment {

@@ -162,7 +162,8 @@ impl Tail {
 
     /// Resolve the tail alone (Bavoil-Myers, see the [module docs](self)).
     ///
-    /// Any tail bytes give a finite result: color channels in `[0, 1023/255]`,
+    /// Any tail bytes give a finite result: color channels in `[0, 1023 * INV255]` (INV255 =
+    /// f32 `1/255`; the tail never amplifies its light),
     /// transmittance in `[0, 1]` (a mean alpha above 1, possible only in arbitrary bytes,
     /// is clamped to 1; a zero count resolves as if the count were 1).
     #[inline]
@@ -196,8 +197,11 @@ pub(crate) fn tail_lanes<F: FloatLanes>(sums: [F::U; 3], alpha: F::U, count: F::
         base = base * base;
     }
     let t_tail = F::select(empty, x, power);
-    // (1 - T_tail) / S_a, whose limit is 1 as S_a -> 0 (pure additive light).
+    // g = (1 - T_tail) / S_a = (1 - (1 - m)^n) / (n m), which lies in (0, 1] and tends to 1
+    // as S_a -> 0 (pure additive light). In f32, `1 - mean` cancels when the mean is a few
+    // ulps, which can push the quotient above 1: clamp it, so the tail never amplifies light.
     let g = F::select(F::is_zero(alpha), one, (one - t_tail).div(s_a));
+    let g = F::select(g.gt(one), one, g);
     let [r, gr, b] = sums;
     (
         [F::from_u(r) * inv * g, F::from_u(gr) * inv * g, F::from_u(b) * inv * g],
