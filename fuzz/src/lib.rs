@@ -11,8 +11,9 @@
 //! | `rows_from_bytes` | arbitrary rows and tails: layout round trips, resolve finite and in range and equal to an f64 composite, insert equal to a transcription of Listing 1 with an independent merge, tail saturation, invariants kept when they held before |
 //! | `lanes_masks` | framebuffer spans with masks at the buffer edges: pixels that are off (or outside) never change, guard rows never change, errors change nothing, resolve equals the per-pixel resolve |
 //!
-//! Lanes: the SIMD lane kernels do not exist yet. Each place where a lanes differential
-//! goes is marked `LANES:`; it is one more call whose bytes must equal the scalar bytes.
+//! Lanes: `mlab_stream`, `hybrid_stream` and `rows_from_bytes` also run every insert and
+//! resolve through `mlab::lanes` (8 pixels, masks) and require byte-for-byte (rows, tails)
+//! and bit-for-bit (resolved f32) equality with the scalar kernel.
 
 pub mod check;
 pub mod input;
@@ -28,7 +29,11 @@ pub const BACKEND: &str = if cfg!(target_feature = "avx2") {
     "scalar"
 };
 
-/// Print which backend runs (called once by each target's `init`).
+/// Print which backend runs (called once by each target's `init`): the fuzz build's
+/// instruction set and the kernel's lanes backend.
 pub fn announce(target: &str) {
-    eprintln!("mlab_fuzz backend: {BACKEND} ({target})");
+    eprintln!(
+        "mlab_fuzz backend: {BACKEND}, lanes {} ({target})",
+        mlab::lanes::BACKEND
+    );
 }

@@ -8,6 +8,8 @@ use mlab::{
     Tail, hybrid, mlab as mlab_mod, resolve_rows, to_rgba8, to_rgba16f,
 };
 
+use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan};
+
 use crate::check::{check_close, check_invariants, check_resolved, distinct_depths, invariants_hold, validate};
 use crate::input::Input;
 use crate::reference::{
@@ -64,15 +66,38 @@ pub fn mlab_stream(data: &[u8]) {
 fn mlab_stream_m<const M: usize>(input: &mut Input) {
     let mut array = BlendingArray::<M>::new();
     let mut reference = RefMlab::new(M);
+    // Lanes: 8 pixels; lane 0 gets every fragment (it must equal `array`), the others the
+    // fragments their bit of `lane_mask(n)` selects; off lanes are handed a garbage row.
+    let mut span: MlabSpan<M> = [[Row::EMPTY; LANES]; M];
+    let mut lane_arrays = [[Row::EMPTY; M]; LANES];
+    let mut raws = Vec::new();
     let mut accepted = Vec::new();
     // Exact background visibility: the product of (1 - alpha).
     let mut visibility = 1.0f64;
     while accepted.len() < MAX_FRAGMENTS {
         let Some(raw) = input.raw_fragment() else { break };
+        raws.push(raw);
+        if raws.len() == LANES {
+            check_fragment_lanes(&raws, lane_mask(accepted.len() + 7));
+            raws.clear();
+        }
         let Some(f) = validate(&raw) else { continue };
         array.insert(&f);
-        // LANES: insert the same row into a lanes blending array that held the same rows
-        // before, and assert_eq! its bytes with `array.rows()`.
+        let mask = lane_mask(accepted.len());
+        let rows8 = lane_rows(f.row(), mask);
+        lanes::mlab_insert(&mut span, &rows8, mask);
+        for (lane, a) in lane_arrays.iter_mut().enumerate() {
+            if mask >> lane & 1 == 1 {
+                mlab_mod::insert(a, rows8[lane]);
+            }
+        }
+        assert_eq!(
+            lanes::to_pixel_major(&span),
+            lane_arrays,
+            "M = {M}: lanes differ from scalar, mask {mask:#010b}"
+        );
+        assert_eq!(&lane_arrays[0], array.rows());
+        check_mlab_resolve_lanes(&span, &lane_arrays);
         reference.insert(f.row());
         accepted.push(parts(&f));
         visibility *= 1.0 - f64::from(f.alpha());
@@ -120,6 +145,8 @@ pub fn hybrid_stream(data: &[u8]) {
 
 fn hybrid_stream_k<const K: usize>(input: &mut Input) {
     let mut ht = Hybrid::<K>::new();
+    let mut span = HybridSpan::<K>::new();
+    let mut lane_px = [Hybrid::<K>::new(); LANES];
     let mut frags = Vec::new();
     let mut rows = Vec::new();
     // The stream ends at a fragment tag 0xff (so the permutation seed can follow) or at the end.
@@ -130,7 +157,16 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
         }
         let Some(f) = validate(&raw) else { continue };
         ht.insert(&f);
-        // LANES: the same insert in a lanes HT pixel; assert_eq! head rows and tail bytes.
+        let mask = lane_mask(frags.len());
+        let rows8 = lane_rows(f.row(), mask);
+        lanes::hybrid_insert(&mut span, &rows8, mask);
+        for (lane, px) in lane_px.iter_mut().enumerate() {
+            if mask >> lane & 1 == 1 {
+                px.insert_row(rows8[lane]);
+            }
+        }
+        check_hybrid_lanes(&span, &lane_px);
+        assert_eq!(lane_px[0], ht);
         frags.push(f);
         rows.push(f.row());
         let (head, tail) = ref_hybrid(K, &rows);
@@ -185,6 +221,123 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
             b.color.to_array().map(f32::to_bits)
         );
     }
+}
+
+// ---------------------------------------------------------------------------------------
+// Lanes differentials (lanes == scalar, byte for byte and bit for bit)
+
+/// A mask for the n-th fragment of a stream: lane 0 always on, the others scattered.
+pub fn lane_mask(n: usize) -> u8 {
+    1 | ((n as u32 + 1).wrapping_mul(0x9e37_79b9) >> 24) as u8
+}
+
+/// A garbage row handed to lanes that are off (a NaN depth and full color): it must never
+/// reach a pixel.
+pub const OFF_LANE_ROW: Row = Row::from_bytes([0xab, 0xcd, 0xef, 0x01, 0xff, 0xff, 0xff, 0xff]);
+
+/// `row` in the lanes that are on, [`OFF_LANE_ROW`] in the others.
+pub fn lane_rows(row: Row, mask: u8) -> [Row; LANES] {
+    core::array::from_fn(|lane| if mask >> lane & 1 == 1 { row } else { OFF_LANE_ROW })
+}
+
+fn resolved_bits(r: Resolved) -> [u32; 4] {
+    let [x, y, z] = r.color.to_array().map(f32::to_bits);
+    [x, y, z, r.transmittance.to_bits()]
+}
+
+/// `lanes::mlab_resolve` (and its RGBA8 form) equal the scalar resolve bit for bit.
+pub fn check_mlab_resolve_lanes<const M: usize>(span: &MlabSpan<M>, pixels: &[[Row; M]; LANES]) {
+    let r = lanes::mlab_resolve(span);
+    let bg = Background::Opaque(Vec3::new(0.25, 0.5, 1.0));
+    let px8 = lanes::mlab_resolve_rgba8(span, bg);
+    for (lane, p) in pixels.iter().enumerate() {
+        let scalar = resolve_rows(p);
+        assert_eq!(
+            r.get(lane).map(resolved_bits),
+            Some(resolved_bits(scalar)),
+            "lane {lane}: {p:?}"
+        );
+        assert_eq!(px8[lane], to_rgba8(scalar.pixel(bg)), "lane {lane} RGBA8: {p:?}");
+    }
+    assert_eq!(r.get(LANES), None);
+}
+
+/// A lanes HT span equals the scalar pixels byte for byte, and resolves bit for bit.
+pub fn check_hybrid_lanes<const K: usize>(span: &HybridSpan<K>, pixels: &[Hybrid<K>; LANES]) {
+    let r = lanes::hybrid_resolve(span);
+    let bg = Background::Transparent;
+    let px8 = lanes::hybrid_resolve_rgba8(span, bg);
+    for (lane, p) in pixels.iter().enumerate() {
+        for j in 0..K {
+            assert_eq!(span.head[j][lane], p.head()[j], "lane {lane} head row {j}");
+        }
+        assert_eq!(span.tails[lane].to_bytes(), p.tail().to_bytes(), "lane {lane} tail");
+        let scalar = p.resolve();
+        assert_eq!(
+            r.get(lane).map(resolved_bits),
+            Some(resolved_bits(scalar)),
+            "lane {lane}: {p:?}"
+        );
+        assert_eq!(px8[lane], to_rgba8(scalar.pixel(bg)), "lane {lane} RGBA8: {p:?}");
+    }
+}
+
+/// `FragmentLanes::quantize` and `quantize_straight` on 8 raw fragments (color, alpha,
+/// depth as given, whatever constructor they were drawn for): on lanes are valid exactly
+/// where the scalar constructor accepts, with the scalar row; off lanes are neither.
+pub fn check_fragment_lanes(raws: &[crate::input::RawFragment], mask: u8) {
+    let fl = FragmentLanes {
+        color: core::array::from_fn(|c| core::array::from_fn(|l| raws[l].color[c])),
+        alpha: core::array::from_fn(|l| raws[l].a),
+        depth: core::array::from_fn(|l| raws[l].z),
+    };
+    for straight in [false, true] {
+        let q = if straight {
+            fl.quantize_straight(mask)
+        } else {
+            fl.quantize(mask)
+        };
+        assert_eq!(q.valid & q.invalid, 0);
+        assert_eq!((q.valid | q.invalid) & !mask, 0, "off lanes reported: {q:?}");
+        for (lane, raw) in raws.iter().enumerate() {
+            let on = mask >> lane & 1 == 1;
+            let c = Vec3::from_array(raw.color);
+            let scalar = if straight {
+                Fragment::straight(c, raw.a, raw.z)
+            } else {
+                Fragment::premultiplied(c, raw.a, raw.z)
+            };
+            match (on, scalar) {
+                (false, _) => assert_eq!(q.rows[lane], Row::EMPTY, "off lane {lane}"),
+                (true, Ok(f)) => {
+                    assert!(
+                        q.valid >> lane & 1 == 1,
+                        "lane {lane}: scalar accepts {raw:?}, lanes refuse"
+                    );
+                    assert_eq!(q.rows[lane], f.row(), "lane {lane}: {raw:?} straight {straight}");
+                }
+                (true, Err(e)) => {
+                    assert!(
+                        q.invalid >> lane & 1 == 1,
+                        "lane {lane}: scalar refuses {raw:?} ({e:?}), lanes accept"
+                    );
+                    assert_eq!(q.rows[lane], Row::EMPTY, "invalid lane {lane}");
+                }
+            }
+        }
+    }
+    // The insert_fragments entry points: invalid lanes reported and left untouched.
+    let mut span = [[Row::EMPTY; LANES]; 2];
+    let invalid = lanes::mlab_insert_fragments(&mut span, &fl, mask);
+    let q = fl.quantize(mask);
+    assert_eq!(invalid, q.invalid);
+    let mut expected = [[Row::EMPTY; 2]; LANES];
+    for (lane, p) in expected.iter_mut().enumerate() {
+        if q.valid >> lane & 1 == 1 {
+            mlab_mod::insert(p, q.rows[lane]);
+        }
+    }
+    assert_eq!(lanes::to_pixel_major(&span), expected);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -284,6 +437,32 @@ fn garbage_mlab<const M: usize>(input: &mut Input) {
         check_invariants(&after, &context);
     }
     check_resolved(resolve_rows(&after), M as f32, &context);
+
+    // Lanes on garbage: lane l holds the rows rotated by l and gets `new` (even lanes) or
+    // one of its own rows (odd lanes, a tie), under a mask from the input.
+    let mask = input.u8().unwrap_or(0xff);
+    let mut pixels = [rows; LANES];
+    let mut rows8 = [new; LANES];
+    for (lane, p) in pixels.iter_mut().enumerate() {
+        p.rotate_left(lane % M);
+        if lane % 2 == 1 {
+            rows8[lane] = p[lane % M];
+        }
+    }
+    let mut span = lanes::from_pixel_major(&pixels);
+    check_mlab_resolve_lanes(&span, &pixels);
+    lanes::mlab_insert(&mut span, &rows8, mask);
+    for (lane, p) in pixels.iter_mut().enumerate() {
+        if mask >> lane & 1 == 1 {
+            mlab_mod::insert(p, rows8[lane]);
+        }
+    }
+    assert_eq!(
+        lanes::to_pixel_major(&span),
+        pixels,
+        "lanes insert on garbage rows {rows:?}, mask {mask:#010b}"
+    );
+    check_mlab_resolve_lanes(&span, &pixels);
 }
 
 fn garbage_hybrid<const K: usize>(input: &mut Input) {
@@ -346,6 +525,35 @@ fn garbage_hybrid<const K: usize>(input: &mut Input) {
         check_invariants(&h, &context);
     }
     check_resolved(hybrid::resolve(&h, t), K as f32 + tail_color_limit(), &context);
+
+    // Lanes on garbage: lane l holds the head rotated by l and the tail bytes rotated by l.
+    let mask = input.u8().unwrap_or(0xff);
+    let mut pixels = [Hybrid::<K>::new(); LANES];
+    for (lane, p) in pixels.iter_mut().enumerate() {
+        let mut hd = head;
+        if K > 0 {
+            hd.rotate_left(lane % K);
+        }
+        let mut tb = tail.to_bytes();
+        tb.rotate_left(lane);
+        *p = Hybrid::from_parts(hd, Tail::from_bytes(tb));
+    }
+    let mut span = HybridSpan::<K>::new();
+    for (lane, p) in pixels.iter().enumerate() {
+        for j in 0..K {
+            span.head[j][lane] = p.head()[j];
+        }
+        span.tails[lane] = p.tail();
+    }
+    check_hybrid_lanes(&span, &pixels);
+    let rows8 = [new; LANES];
+    lanes::hybrid_insert(&mut span, &rows8, mask);
+    for (lane, p) in pixels.iter_mut().enumerate() {
+        if mask >> lane & 1 == 1 {
+            p.insert_row(new);
+        }
+    }
+    check_hybrid_lanes(&span, &pixels);
 }
 
 /// The pixel writers on a resolved value and a background read from the input (any bits:
