@@ -616,6 +616,22 @@ pub trait Layout {
     fn ref_resolve(slots: &[Row]) -> Resolved;
     /// A cleared pixel.
     fn cleared(slots: &mut [Row]);
+    /// The span `x0 .. x0 + 8` of line `y` through the lanes kernel: gather the pixels into
+    /// a lanes span (lanes outside the buffer hold a sentinel), insert `row` in the lanes of
+    /// `mask` that are inside, check that every other lane is unchanged, scatter back.
+    fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8);
+}
+
+/// Lanes of the span `x0 .. x0 + 8` that lie inside a `w x h` buffer on line `y`.
+fn inside(w: u32, h: u32, x0: u32, y: u32) -> u8 {
+    (0..LANES as u32)
+        .filter(|&l| x0 + l < w && y < h)
+        .fold(0, |m, l| m | 1 << l)
+}
+
+/// The sentinel row of lane `lane`, layer `j` of a span (outside the buffer).
+fn sentinel(lane: usize, j: usize) -> Row {
+    Row::new([lane as u8, j as u8, 0x5a], 0x33, -(lane as f32) - 0.5)
 }
 
 /// MLAB with `M` rows per pixel.
@@ -687,6 +703,31 @@ impl<const M: usize> Layout for MlabLayout<M> {
     fn cleared(slots: &mut [Row]) {
         slots.fill(Row::EMPTY);
     }
+    fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8) {
+        let on = mask & inside(w, h, x0, y);
+        let base = |lane: usize| (y as usize * w as usize + x0 as usize + lane) * M;
+        let mut span: MlabSpan<M> = core::array::from_fn(|j| core::array::from_fn(|lane| sentinel(lane, j)));
+        for lane in (0..LANES).filter(|&l| inside(w, h, x0, y) >> l & 1 == 1) {
+            for (j, layer) in span.iter_mut().enumerate() {
+                layer[lane] = storage[base(lane) + j];
+            }
+        }
+        let before = span;
+        lanes::mlab_insert(&mut span, &lane_rows(row, on), on);
+        for lane in (0..LANES).filter(|&l| on >> l & 1 == 0) {
+            for j in 0..M {
+                assert_eq!(
+                    span[j][lane], before[j][lane],
+                    "lane {lane} is off (mask {mask:#010b}) but changed"
+                );
+            }
+        }
+        for lane in (0..LANES).filter(|&l| inside(w, h, x0, y) >> l & 1 == 1) {
+            for (j, layer) in span.iter().enumerate() {
+                storage[base(lane) + j] = layer[lane];
+            }
+        }
+    }
 }
 
 impl<const K: usize> Layout for HybridLayout<K> {
@@ -727,6 +768,40 @@ impl<const K: usize> Layout for HybridLayout<K> {
         slots[..K].fill(Row::EMPTY);
         slots[K] = Row::from_bytes([0; 8]);
     }
+    fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8) {
+        let on = mask & inside(w, h, x0, y);
+        let base = |lane: usize| (y as usize * w as usize + x0 as usize + lane) * (K + 1);
+        let mut span = HybridSpan::<K> {
+            head: core::array::from_fn(|j| core::array::from_fn(|lane| sentinel(lane, j))),
+            tails: core::array::from_fn(|lane| Tail::from_bytes(sentinel(lane, K).to_bytes())),
+        };
+        for lane in (0..LANES).filter(|&l| inside(w, h, x0, y) >> l & 1 == 1) {
+            for (j, layer) in span.head.iter_mut().enumerate() {
+                layer[lane] = storage[base(lane) + j];
+            }
+            span.tails[lane] = Tail::from_bytes(storage[base(lane) + K].to_bytes());
+        }
+        let before = span;
+        lanes::hybrid_insert(&mut span, &lane_rows(row, on), on);
+        for lane in (0..LANES).filter(|&l| on >> l & 1 == 0) {
+            for j in 0..K {
+                assert_eq!(
+                    span.head[j][lane], before.head[j][lane],
+                    "lane {lane} is off (mask {mask:#010b}) but changed"
+                );
+            }
+            assert_eq!(
+                span.tails[lane], before.tails[lane],
+                "lane {lane} is off (mask {mask:#010b}): tail changed"
+            );
+        }
+        for lane in (0..LANES).filter(|&l| inside(w, h, x0, y) >> l & 1 == 1) {
+            for (j, layer) in span.head.iter().enumerate() {
+                storage[base(lane) + j] = layer[lane];
+            }
+            storage[base(lane) + K] = Row::from_bytes(span.tails[lane].to_bytes());
+        }
+    }
 }
 
 /// Guard rows on each side of the storage handed to the framebuffer.
@@ -737,14 +812,13 @@ const GUARD_ROW: Row = Row::new([0xde, 0xad, 0xbe], 0xef, -1234.5);
 /// `lanes_masks`: the first byte picks the kind (MLAB with M = 1, 2, 4 or HT with
 /// K = 0, 1, 3), then width, height, storage length, contents, and a list of operations.
 ///
-/// Today this drives the scalar framebuffer, one pixel per lane of a span: spans of up to
-/// 8 pixels with an 8-bit mask, starting anywhere (also past the right and bottom edges).
-/// Pixels that are off, or outside the buffer, never change; guard rows never change;
-/// an error changes nothing.
-///
-/// LANES: when the lane kernels land, each span also runs through the lanes entry point
-/// (mask = the span mask, partial spans at the right edge) on a copy of the storage, and
-/// the copy must equal the scalar storage byte for byte.
+/// Spans of up to 8 pixels with an 8-bit mask, starting anywhere (also past the right and
+/// bottom edges), go through the scalar framebuffer one pixel per lane, and through the
+/// lanes kernel (`mlab::lanes::mlab_insert` / `hybrid_insert`, gathered from and
+/// scattered to the same storage, lanes outside the buffer holding a sentinel and masked
+/// off). Pixels that are off, or outside the buffer, never change (in the storage and in
+/// the lanes span); guard rows never change; an error changes nothing; the lanes storage
+/// equals the scalar storage byte for byte.
 pub fn lanes_masks(data: &[u8]) {
     let mut input = Input::new(data);
     let Some(sel) = input.u8() else { return };
@@ -808,6 +882,7 @@ fn spans<L: Layout>(input: &mut Input) {
         let Some(op) = input.u8() else { break };
         let before = buf.clone();
         let mut expected = buf.clone();
+        let mut lanes_result: Option<Vec<Row>> = None;
         let mut v = L::view(&mut buf[GUARD..GUARD + len], w, h).expect("accepted above");
         match op % 4 {
             // A span: pixels x0 .. x0 + n on line y, lane i on if bit i of the mask.
@@ -818,6 +893,11 @@ fn spans<L: Layout>(input: &mut Input) {
                 let Some(raw) = input.raw_fragment() else { break };
                 let Some(f) = validate(&raw) else { continue };
                 let (x0, y, n) = (u32::from(x0) % (w + 4), u32::from(y) % (h + 2), u32::from(n % 9));
+                // The lanes kernel on a copy: lanes 0 .. n of the mask, at the same place.
+                let span_mask = (mask as u16 & ((1u16 << n) - 1)) as u8;
+                let mut lanes_buf = before.clone();
+                L::lanes_span(&mut lanes_buf[GUARD..GUARD + len], w, h, x0, y, f.row(), span_mask);
+                lanes_result = Some(lanes_buf);
                 for lane in 0..n {
                     let x = x0 + lane;
                     if mask >> lane & 1 == 0 {
@@ -840,8 +920,6 @@ fn spans<L: Layout>(input: &mut Input) {
                         );
                     }
                 }
-                // LANES: run the same span (x0, y, n, mask) through the lanes kernel on a copy
-                // of `before` and assert_eq! it with `buf` after this match.
             }
             // Resolve every pixel into an output of the right length, or one off.
             2 => {
@@ -925,5 +1003,11 @@ fn spans<L: Layout>(input: &mut Input) {
             buf, expected,
             "{w}x{h}: pixels differ from the per-pixel reference after op {op}"
         );
+        if let Some(lanes_buf) = lanes_result {
+            assert_eq!(
+                lanes_buf, buf,
+                "{w}x{h}: the lanes span differs from the scalar framebuffer"
+            );
+        }
     }
 }
