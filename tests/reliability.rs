@@ -215,25 +215,29 @@ fn several_defects_at_once() {
         Fragment::premultiplied(Vec3::splat(nan), 7.0, f32::INFINITY),
         Err(E::NanColor)
     );
-    // After NaN, what the code does today (the module docs say "then infinities, then
-    // ranges"; see `open_finding_error_order_differs_from_docs`): color (infinite, then
-    // negative), alpha range, infinite depth, color above one.
+    // Then infinities (color, then depth), then ranges (negative color, alpha, color above one).
+    let inf = f32::INFINITY;
     assert_eq!(
-        Fragment::premultiplied(Vec3::new(f32::INFINITY, -1.0, 0.0), 7.0, f32::INFINITY),
+        Fragment::premultiplied(Vec3::new(inf, -1.0, 0.0), 7.0, inf),
         Err(E::InfiniteColor)
     );
     assert_eq!(
-        Fragment::premultiplied(Vec3::new(2.0, -1.0, 0.0), 7.0, f32::INFINITY),
+        Fragment::premultiplied(Vec3::new(2.0, -1.0, 0.0), 7.0, inf),
+        Err(E::InfiniteDepth)
+    );
+    assert_eq!(
+        Fragment::premultiplied(Vec3::new(-1.0, 0.0, 0.0), 0.5, inf),
+        Err(E::InfiniteDepth)
+    );
+    assert_eq!(
+        Fragment::premultiplied(Vec3::new(2.0, -1.0, 0.0), inf, 1.0),
         Err(E::NegativeColor)
     );
     assert_eq!(
-        Fragment::premultiplied(Vec3::splat(2.0), 7.0, f32::INFINITY),
+        Fragment::premultiplied(Vec3::splat(2.0), 7.0, 1.0),
         Err(E::AlphaOutOfRange)
     );
-    assert_eq!(
-        Fragment::premultiplied(Vec3::splat(2.0), 0.5, f32::INFINITY),
-        Err(E::InfiniteDepth)
-    );
+    assert_eq!(Fragment::straight(Vec3::splat(4.0), 0.5, 1.0), Err(E::ColorAboveOne));
     // `with_transmittance` checks its transmittance argument before anything else.
     assert_eq!(Fragment::with_transmittance(OK, 2.0, nan), Err(E::AlphaOutOfRange));
 }
@@ -479,34 +483,59 @@ fn background_not_validated() {
     assert!(to_rgba16f(bright)[0].is_infinite());
 }
 
-// ---- Open findings (kernel bugs): reproducers, ignored until fixed -----------------------
+// ---- Lanes ----------------------------------------------------------------------------
 
-/// `Tail::resolve` documents color channels in `[0, 1023/255]`, and Bavoil-Myers never
-/// amplifies the tail's light (`(1 - (1 - m)^n) / (n m) <= 1`). In f32, `1 - mean` rounds
-/// to a multiple of 2^-24 when the mean alpha is tiny (many additive fragments and one
-/// faint one), so `(1 - T_tail) / S_a` can be far above 1: here the tail's light comes out
-/// 32% too bright, above the documented range. Reachable from valid fragments (below).
 #[test]
-#[ignore = "kernel bug: Tail::resolve amplifies tail light when the mean alpha is a few f32 ulps (f32 cancellation in 1 - mean); see docs/reliability.md"]
-fn open_finding_tail_resolve_amplifies_light() {
-    let r = Tail::from_sums([1023; 3], 1, 43690).resolve();
-    let exact_t = (1.0 - 1.0 / (255.0 * 43690.0f64)).powf(43690.0);
-    let exact_c = 1023.0 / 255.0 * (1.0 - exact_t) * 255.0;
-    assert!(
-        r.color.x <= 1023.0 / 255.0,
-        "color {} above 1023/255 (exact {exact_c})",
-        r.color.x
-    );
+fn lanes_invalid_fragments_and_off_lanes() {
+    use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES};
+    // One bad input of each kind per lane; lane 7 is valid but off.
+    let nan = f32::NAN;
+    let frags = FragmentLanes {
+        color: [
+            [0.5, nan, f32::INFINITY, -0.5, 1.5, 0.5, 0.5, 0.5],
+            [0.25; LANES],
+            [0.0; LANES],
+        ],
+        alpha: [0.5, 0.5, 0.5, 0.5, 1.0, 2.0, 0.5, 0.5],
+        depth: [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, f32::INFINITY, 3.0],
+    };
+    let mask = 0b0111_1111;
+    let q = frags.quantize(mask);
+    assert_eq!((q.valid, q.invalid), (0b0000_0001, 0b0111_1110));
+    for lane in 0..LANES {
+        let c = Vec3::new(frags.color[0][lane], frags.color[1][lane], frags.color[2][lane]);
+        let scalar = Fragment::premultiplied(c, frags.alpha[lane], frags.depth[lane]);
+        assert_eq!(scalar.is_err(), q.invalid >> lane & 1 == 1, "lane {lane}: {scalar:?}");
+    }
+    // Invalid and off lanes are left untouched, whatever rows they are handed.
+    let garbage = Row::from_bytes([0xab, 0xcd, 0xef, 1, 0xff, 0xff, 0xff, 0xff]);
+    let mut span = [[garbage; LANES]; 2];
+    span[0][0] = Row::EMPTY;
+    span[1][0] = Row::EMPTY;
+    assert_eq!(lanes::mlab_insert_fragments(&mut span, &frags, mask), q.invalid);
+    assert_eq!(span[0][0], Row::new([128, 64, 0], 127, 1.0));
+    assert!((1..LANES).all(|lane| span[0][lane] == garbage && span[1][lane] == garbage));
+    let mut ht = HybridSpan::<1>::new();
+    lanes::hybrid_insert(&mut ht, &[garbage; LANES], 0);
+    assert_eq!(ht, HybridSpan::<1>::new());
 }
 
-/// The tail of `open_finding_tail_resolve_amplifies_light` from valid fragments: one faint
-/// fragment (alpha 1/255) and 43689 additive ones into HT with K = 0. The pixel over black
-/// should be `1023 (1 - (1 - 1/(255 n))^n)` = 4.0039; the kernel gives 5.3149.
+// ---- Findings: regression tests for fixed ones, reproducers (ignored) for open ones ----
+
+/// F1 (fixed in d37150f): `Tail::resolve` amplified the tail's light above the documented
+/// `[0, 1023/255]` (5.31 instead of 4.00) when the mean alpha was a few f32 ulps.
 #[test]
-#[ignore = "kernel bug: Tail::resolve amplifies tail light (same as open_finding_tail_resolve_amplifies_light)"]
-fn open_finding_tail_light_from_valid_fragments() {
-    let exact_t = (1.0 - 1.0 / (255.0 * 43690.0f64)).powf(43690.0);
-    let exact_c = 1023.0 * (1.0 - exact_t);
+fn finding_f1_tail_never_amplifies_light() {
+    for count in [43690, 30000, 49418, 65535] {
+        for alpha in [1, 2, 5] {
+            let r = Tail::from_sums([1023; 3], alpha, count).resolve();
+            assert!(
+                r.color.max_element() <= 1023.0 * INV255,
+                "count {count}, alpha {alpha}: {r:?}"
+            );
+        }
+    }
+    // The same tail from valid fragments: one faint fragment and 43689 additive ones.
     let mut h = Hybrid::<0>::new();
     h.insert(&Fragment::premultiplied(Vec3::ONE, 1.0 / 255.0, 0.0).unwrap());
     let light = Fragment::additive(Vec3::ONE, 1.0).unwrap();
@@ -517,21 +546,31 @@ fn open_finding_tail_light_from_valid_fragments() {
         (h.tail().color_sum(), h.tail().alpha_sum(), h.tail().count()),
         ([1023; 3], 1, 43690)
     );
+    let exact = 1023.0 * (1.0 - (1.0 - 1.0 / (255.0 * 43690.0f64)).powf(43690.0));
     let px = h.resolve().over(Vec3::ZERO);
-    assert!(
-        (f64::from(px.x) - exact_c).abs() < 0.01,
-        "pixel {px:?}, exact {exact_c}"
-    );
+    assert!((f64::from(px.x) - exact).abs() < 0.01, "pixel {px:?}, exact {exact}");
 }
 
-/// `Fragment::premultiplied` documents "NaN anywhere (depth, alpha, color), then
-/// infinities, then ranges". The code checks color range (negative) before infinite depth
-/// and before infinite alpha, so a fragment with both reports the range error.
+/// F1b (open): the clamp of F1 removed the amplification, not the cancellation. When
+/// `1 - mean` rounds *up* (mean alpha just under 1.5 f32 ulps of 1), `(1 - T_tail) / S_a`
+/// is too small and the tail's light is dimmed by up to a third: tail `color [1023; 3],
+/// alpha 1, count 45372` resolves to about 2.8 instead of 4.0. Suggested fix: compute
+/// `g = (1 - x^n) / (n (1 - x))` as `S_n / n`, with the geometric sum
+/// `S_n = 1 + x + ... + x^(n-1)` built by the same binary exponentiation as `x^n`
+/// (`S_(a+b) = S_a + x^a S_b`): multiplies and adds only, no cancellation.
 #[test]
-#[ignore = "kernel bug (docs or code): error order after NaN differs from the documented 'then infinities, then ranges'"]
-fn open_finding_error_order_differs_from_docs() {
-    assert_eq!(
-        Fragment::premultiplied(Vec3::new(-1.0, 0.0, 0.0), 0.5, f32::INFINITY),
-        Err(E::InfiniteDepth)
+#[ignore = "kernel bug F1b: Tail::resolve dims tail light by up to 1/3 when the mean alpha is about 1.5 f32 ulps (cancellation in 1 - mean)"]
+fn open_finding_f1b_tail_light_dimmed() {
+    let (alpha, count) = (1u32, 45372u32);
+    let r = Tail::from_sums([1023; 3], alpha, count).resolve();
+    let n = f64::from(count);
+    let s_a = f64::from(alpha) / 255.0;
+    let exact = 1023.0 / 255.0 * (1.0 - (1.0 - s_a / n).powf(n)) / s_a;
+    let err = (f64::from(r.color.x) - exact).abs() / exact;
+    assert!(
+        err < 0.01,
+        "tail color {} vs exact {exact}: {:.1}% off",
+        r.color.x,
+        100.0 * err
     );
 }

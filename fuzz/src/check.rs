@@ -39,31 +39,52 @@ pub fn validate(raw: &RawFragment) -> Option<Fragment> {
     }
 }
 
-/// The documented order: NaN anywhere first (depth, then alpha, then color).
-/// `with_transmittance` checks its transmittance argument before anything else.
-fn check_nan_first(raw: &RawFragment, e: FragmentError) {
+/// The documented order (kernel `Fragment::premultiplied` docs, since d37150f): NaN
+/// (depth, alpha, color), then infinities (color, depth), then ranges (negative color,
+/// alpha outside `[0, 1]`, premultiplied color above 1). `with_transmittance` checks its
+/// transmittance argument (NaN, range) before anything else.
+pub fn expected_error(raw: &RawFragment) -> Option<FragmentError> {
+    let (c, a, z) = (raw.color, raw.a, raw.z);
     if raw.ctor == Ctor::WithTransmittance {
-        if raw.a.is_nan() {
-            assert_eq!(e, FragmentError::NanAlpha, "{raw:?}");
-            return;
+        if a.is_nan() {
+            return Some(FragmentError::NanAlpha);
         }
-        if !(0.0..=1.0).contains(&raw.a) {
-            assert_eq!(e, FragmentError::AlphaOutOfRange, "{raw:?}");
-            return;
+        if !(0.0..=1.0).contains(&a) {
+            return Some(FragmentError::AlphaOutOfRange);
         }
     }
-    let first_nan = if raw.z.is_nan() {
-        Some(FragmentError::NanDepth)
-    } else if raw.a.is_nan() {
-        Some(FragmentError::NanAlpha)
-    } else if raw.color.iter().any(|c| c.is_nan()) {
-        Some(FragmentError::NanColor)
+    let alpha = if raw.ctor == Ctor::WithTransmittance {
+        1.0 - a
     } else {
-        None
+        a
     };
-    if let Some(nan) = first_nan {
-        assert_eq!(e, nan, "{raw:?}: NaN must be reported first");
+    let checks = [
+        (z.is_nan(), FragmentError::NanDepth),
+        (alpha.is_nan(), FragmentError::NanAlpha),
+        (c.iter().any(|v| v.is_nan()), FragmentError::NanColor),
+        (c.iter().any(|v| v.is_infinite()), FragmentError::InfiniteColor),
+        (z.is_infinite(), FragmentError::InfiniteDepth),
+        (c.iter().any(|&v| v < 0.0), FragmentError::NegativeColor),
+        (!(0.0..=1.0).contains(&alpha), FragmentError::AlphaOutOfRange),
+    ];
+    if let Some(&(_, e)) = checks.iter().find(|(hit, _)| *hit) {
+        return Some(e);
     }
+    let pre = if raw.ctor == Ctor::Straight {
+        c.map(|v| v * alpha)
+    } else {
+        c
+    };
+    pre.iter().any(|&v| v > 1.0).then_some(FragmentError::ColorAboveOne)
+}
+
+/// The error must be the first defect in the documented order.
+fn check_nan_first(raw: &RawFragment, e: FragmentError) {
+    assert_eq!(
+        Some(e),
+        expected_error(raw),
+        "{raw:?}: not the first defect in the documented order"
+    );
 }
 
 /// The row of a valid fragment: each byte within half a step (plus f32 rounding) of the
