@@ -23,6 +23,8 @@ use wide::{u8x32, u16x16, u32x8};
 const W: usize = 128;
 const H: usize = 128;
 const SPANS: usize = W * H / LANES;
+/// Spans of the small target (32 x 32 pixels, 32 KiB of rows at M = 4: in L1).
+const SMALL_SPANS: usize = 32 * 32 / LANES;
 
 struct Rng(u64);
 impl Rng {
@@ -51,11 +53,11 @@ fn fragment_row(rng: &mut Rng, depth: f32) -> Row {
     mlab::Fragment::straight(c, alpha, depth).expect("valid").row()
 }
 
-fn random_stream() -> Vec<Step> {
+fn random_stream(spans: usize) -> Vec<Step> {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     (0..8192)
         .map(|_| {
-            let span = (rng.next() % SPANS as u64) as usize;
+            let span = (rng.next() % spans as u64) as usize;
             let rows = core::array::from_fn(|_| {
                 let z = 100.0 * rng.unit();
                 fragment_row(&mut rng, z)
@@ -99,6 +101,7 @@ fn fragments(stream: &[Step]) -> u64 {
     stream.iter().map(|s| s.mask.count_ones() as u64).sum()
 }
 
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn mlab_scalar<const M: usize>(pixels: &mut [[Row; M]], stream: &[Step]) {
     for s in stream {
         for (lane, row) in s.rows.iter().enumerate() {
@@ -109,6 +112,7 @@ fn mlab_scalar<const M: usize>(pixels: &mut [[Row; M]], stream: &[Step]) {
     }
 }
 
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn mlab_lanes<const M: usize>(spans: &mut [MlabSpan<M>], stream: &[Step]) {
     for s in stream {
         lanes::mlab_insert(&mut spans[s.span], &s.rows, s.mask);
@@ -117,6 +121,7 @@ fn mlab_lanes<const M: usize>(spans: &mut [MlabSpan<M>], stream: &[Step]) {
 
 /// The alternative arrangement: lanes over pixel-major storage, transposing the span's
 /// rows to layer-major and back around every insert.
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn mlab_lanes_pixel_major<const M: usize>(pixels: &mut [[Row; M]], stream: &[Step]) {
     for s in stream {
         let chunk: &mut [[Row; M]; LANES] = (&mut pixels[s.span * LANES..(s.span + 1) * LANES])
@@ -128,6 +133,7 @@ fn mlab_lanes_pixel_major<const M: usize>(pixels: &mut [[Row; M]], stream: &[Ste
     }
 }
 
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn hybrid_scalar<const K: usize>(pixels: &mut [([Row; K], Tail)], stream: &[Step]) {
     for s in stream {
         for (lane, row) in s.rows.iter().enumerate() {
@@ -139,6 +145,7 @@ fn hybrid_scalar<const K: usize>(pixels: &mut [([Row; K], Tail)], stream: &[Step
     }
 }
 
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn hybrid_lanes<const K: usize>(spans: &mut [HybridSpan<K>], stream: &[Step]) {
     for s in stream {
         lanes::hybrid_insert(&mut spans[s.span], &s.rows, s.mask);
@@ -166,6 +173,7 @@ fn rgba_of(stream: &[Step]) -> Vec<[u32; LANES]> {
         .collect()
 }
 
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn over_scalar(buf: &mut [u32], stream: &[Step], src: &[[u32; LANES]]) {
     for (s, px) in stream.iter().zip(src) {
         for lane in 0..LANES {
@@ -177,6 +185,7 @@ fn over_scalar(buf: &mut [u32], stream: &[Step], src: &[[u32; LANES]]) {
     }
 }
 
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn over_lanes(buf: &mut [u32], stream: &[Step], src: &[[u32; LANES]]) {
     let bytes02 = u32x8::splat(0x00ff_00ff);
     let bits = u32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
@@ -225,7 +234,7 @@ macro_rules! hybrid_group {
 fn insert(c: &mut Criterion) {
     println!("mlab lanes backend: {}", lanes::BACKEND);
     for (name, stream) in [
-        ("insert_random", random_stream()),
+        ("insert_random", random_stream(SPANS)),
         ("insert_coherent", coherent_stream()),
     ] {
         let src = rgba_of(&stream);
@@ -248,8 +257,32 @@ fn insert(c: &mut Criterion) {
     }
 }
 
+/// The random stream into a 32 x 32 target that stays in L1: compute bound, for comparison.
+fn insert_small(c: &mut Criterion) {
+    let stream = random_stream(SMALL_SPANS);
+    let mut g = c.benchmark_group("insert_random_l1");
+    g.throughput(Throughput::Elements(fragments(&stream)));
+    let src = rgba_of(&stream);
+    let mut buf = vec![0u32; SMALL_SPANS * LANES];
+    g.bench_function("over_rgba8_scalar", |b| {
+        b.iter(|| over_scalar(&mut buf, black_box(&stream), &src))
+    });
+    g.bench_function("over_rgba8_lanes", |b| {
+        b.iter(|| over_lanes(&mut buf, black_box(&stream), &src))
+    });
+    let mut pixels = vec![[Row::EMPTY; 4]; SMALL_SPANS * LANES];
+    g.bench_function(BenchmarkId::new("mlab_scalar", 4), |b| {
+        b.iter(|| mlab_scalar::<4>(&mut pixels, black_box(&stream)))
+    });
+    let mut spans = vec![[[Row::EMPTY; LANES]; 4]; SMALL_SPANS];
+    g.bench_function(BenchmarkId::new("mlab_lanes", 4), |b| {
+        b.iter(|| mlab_lanes::<4>(&mut spans, black_box(&stream)))
+    });
+    g.finish();
+}
+
 fn resolve(c: &mut Criterion) {
-    let stream = random_stream();
+    let stream = random_stream(SPANS);
     let mut pixels = vec![[Row::EMPTY; 4]; W * H];
     mlab_scalar::<4>(&mut pixels, &stream);
     let spans: Vec<MlabSpan<4>> = pixels
@@ -298,6 +331,6 @@ fn resolve(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().warm_up_time(std::time::Duration::from_millis(500)).measurement_time(std::time::Duration::from_secs(2)).sample_size(30);
-    targets = insert, resolve
+    targets = insert, insert_small, resolve
 }
 criterion_main!(benches);

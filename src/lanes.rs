@@ -94,7 +94,8 @@ impl RowLanes for Row {
     }
     #[inline(always)]
     fn select(mask: bool, a: Self, b: Self) -> Self {
-        if mask { a } else { b }
+        // Branchless (cmov): a data-dependent branch mispredicts on every unsorted stream.
+        Row::from_le_u64(core::hint::select_unpredictable(mask, a.to_le_u64(), b.to_le_u64()))
     }
     #[inline(always)]
     fn merge(front: Self, back: Self) -> Self {
@@ -108,7 +109,7 @@ impl RowLanes for Row {
     }
     #[inline(always)]
     fn select_tail(mask: bool, a: Tail, b: Tail) -> Tail {
-        if mask { a } else { b }
+        core::hint::select_unpredictable(mask, a, b)
     }
 }
 
@@ -250,6 +251,12 @@ impl core::ops::BitAnd for Mask8 {
 }
 
 impl Mask8 {
+    /// Every lane on.
+    const ALL: Mask8 = Mask8 {
+        a: u32x8::MAX,
+        b: u32x8::MAX,
+    };
+
     /// From a bitmask (bit `i` = lane `i`).
     #[inline(always)]
     fn from_bits(bits: u8) -> Mask8 {
@@ -277,12 +284,12 @@ fn widen_lo(m: u32x8) -> u32x8 {
     l | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(l) << 32)
 }
 
-/// `round(x / 255)` in each 16-bit slot holding `x <= 65025` (slots at bits 0 and 16 of each dword).
+/// `round(x / 255)` in each 16-bit slot holding `x <= 65025`: `((x + 128) * 257) >> 16`,
+/// one add and one high multiply (`pmulhuw`). Equal to [`crate::unorm::div255`] for every
+/// such `x` (`div255_slots_is_exact` checks all of them).
 #[inline(always)]
-fn div255_slots(x: u32x8) -> u32x8 {
-    let y = x + u32x8::splat(0x0080_0080);
-    let y = y + ((y >> 8) & BYTES02);
-    (y >> 8) & BYTES02
+fn div255_slots(x: u16x16) -> u16x16 {
+    (x + u16x16::splat(128)).mul_keep_high(u16x16::splat(257))
 }
 
 /// Merge (Eq. 7-8) for four rows in one register: SWAR over 16-bit slots.
@@ -294,8 +301,8 @@ fn merge4(front: u32x8, back: u32x8) -> u32x8 {
     // Bytes 0 and 2 (R, B) and bytes 1 and 3 (G, T) of the back row, one per 16-bit slot.
     let even: u16x16 = cast(back & BYTES02);
     let odd: u16x16 = cast((back >> 8) & BYTES02);
-    let pe = div255_slots(cast(even * t2)); // each slot <= 255 * 255: no carry
-    let po = div255_slots(cast(odd * t2));
+    let pe: u32x8 = cast(div255_slots(even * t2)); // each product <= 255 * 255: no carry
+    let po: u32x8 = cast(div255_slots(odd * t2));
     let product = pe | (po << 8); // round(back.rgbt * T_front / 255), bytewise
     // A_front + product, saturating; the front's T byte is replaced by the product's T.
     let a_front = front & u32x8::splat(0x00ff_ffff);
@@ -429,7 +436,13 @@ impl<const K: usize> Default for HybridSpan<K> {
 #[inline]
 pub fn mlab_insert<const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
     let mut b: [Rows8; M] = span.map(|layer| Rows8::load(&layer));
-    crate::mlab::insert_lanes(&mut b, Rows8::load(rows), Mask8::from_bits(mask));
+    // Full spans (the common case) skip the mask: with a constant all-ones mask the
+    // compiler drops the ANDs and the final select.
+    if mask == 0xff {
+        crate::mlab::insert_lanes(&mut b, Rows8::load(rows), Mask8::ALL);
+    } else {
+        crate::mlab::insert_lanes(&mut b, Rows8::load(rows), Mask8::from_bits(mask));
+    }
     for (layer, r) in span.iter_mut().zip(b) {
         *layer = r.store();
     }
@@ -452,7 +465,11 @@ pub fn hybrid_insert_parts<const K: usize>(
 ) {
     let mut h: [Rows8; K] = head.map(|layer| Rows8::load(&layer));
     let mut t = Rows8::load_tails(tails);
-    crate::hybrid::insert_lanes(&mut h, &mut t, Rows8::load(rows), Mask8::from_bits(mask));
+    if mask == 0xff {
+        crate::hybrid::insert_lanes(&mut h, &mut t, Rows8::load(rows), Mask8::ALL);
+    } else {
+        crate::hybrid::insert_lanes(&mut h, &mut t, Rows8::load(rows), Mask8::from_bits(mask));
+    }
     for (layer, r) in head.iter_mut().zip(h) {
         *layer = r.store();
     }
@@ -714,4 +731,17 @@ pub fn to_pixel_major<const M: usize>(span: &MlabSpan<M>) -> [[Row; M]; LANES] {
 /// The inverse of [`to_pixel_major`].
 pub fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> MlabSpan<M> {
     core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn div255_slots_is_exact() {
+        for x in 0..=255u32 * 255 {
+            let got = div255_slots(u16x16::splat(x as u16)).to_array();
+            assert!(got.iter().all(|&q| q as u32 == crate::unorm::div255(x)), "x = {x}");
+        }
+    }
 }
