@@ -8,10 +8,12 @@
 //! - [`metrics`]: RMSE, PSNR, max error, FLIP, background visibility bias.
 //! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.
 //! - [`report`]: the whole evaluation of one stream.
+//! - [`frame`]: whole frames on every core (band-binned, `rayon`), MLAB and the baselines.
 
 #![forbid(unsafe_code)]
 
 pub mod dump;
+pub mod frame;
 pub mod methods;
 pub mod metrics;
 pub mod picture;
