@@ -384,14 +384,13 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
     #[inline]
     pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
         let i = self.dims.index(x, y)?;
-        if let Some(p) = self.rows.get_mut(i * (K + 1)..(i + 1) * (K + 1)) {
-            if let Some((t, h)) = p.split_last_mut() {
-                if let Ok(head) = <&mut [Row; K]>::try_from(h) {
-                    let mut tail = Tail::from_bytes(t.to_bytes());
-                    hybrid::insert(head, &mut tail, row);
-                    *t = Row::from_bytes(tail.to_bytes());
-                }
-            }
+        if let Some(p) = self.rows.get_mut(i * (K + 1)..(i + 1) * (K + 1))
+            && let Some((t, h)) = p.split_last_mut()
+            && let Ok(head) = <&mut [Row; K]>::try_from(h)
+        {
+            let mut tail = Tail::from_bytes(t.to_bytes());
+            hybrid::insert(head, &mut tail, row);
+            *t = Row::from_bytes(tail.to_bytes());
         }
         Ok(())
     }

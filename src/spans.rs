@@ -218,15 +218,15 @@ impl<'a, const M: usize> SpanFramebuffer<'a, M> {
     pub fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
         let (span, shift, m0, m1) = self.dims.split(x, y, mask)?;
         let rows = if shift == 0 { *rows } else { rotate(rows, shift) };
-        if m0 != 0 {
-            if let Some(s) = self.spans.get_mut(span) {
-                lanes::mlab_insert(s, &rows, m0);
-            }
+        if m0 != 0
+            && let Some(s) = self.spans.get_mut(span)
+        {
+            lanes::mlab_insert(s, &rows, m0);
         }
-        if m1 != 0 {
-            if let Some(s) = self.spans.get_mut(span + 1) {
-                lanes::mlab_insert(s, &rows, m1);
-            }
+        if m1 != 0
+            && let Some(s) = self.spans.get_mut(span + 1)
+        {
+            lanes::mlab_insert(s, &rows, m1);
         }
         Ok(())
     }
@@ -473,10 +473,10 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
         let (span, shift, m0, m1) = self.dims.split(x, y, mask)?;
         let rows = if shift == 0 { *rows } else { rotate(rows, shift) };
         for (i, m) in [(span, m0), (span + 1, m1)] {
-            if m != 0 {
-                if let Some((head, tails)) = self.parts_mut(i) {
-                    lanes::hybrid_insert_parts(head, tails, &rows, m);
-                }
+            if m != 0
+                && let Some((head, tails)) = self.parts_mut(i)
+            {
+                lanes::hybrid_insert_parts(head, tails, &rows, m);
             }
         }
         Ok(())
