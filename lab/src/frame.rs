@@ -365,6 +365,11 @@ impl Compositor {
         &self.mlab
     }
 
+    /// MLAB's binning alone (quantization included), for the bench's breakdown.
+    pub fn bin_rows(&mut self, stream: &Stream) -> Result<(), String> {
+        self.rows.fill(stream, self.band_lines, self.chunk, quantize_rows)
+    }
+
     /// MLAB with `M` rows: bin, then per band (in parallel) clear, span inserts, resolve.
     pub fn mlab<const M: usize>(&mut self, stream: &Stream, out: &mut [[u8; 4]]) -> Result<(), String> {
         self.rows.fill(stream, self.band_lines, self.chunk, quantize_rows)?;
@@ -522,6 +527,52 @@ impl Compositor {
         });
         Ok(())
     }
+}
+
+/// MLAB without bins, on the calling thread: the whole stream in submission order into one
+/// framebuffer over `storage` (consecutive fragments of one span grouped as in the bands),
+/// then the lanes resolve. The comparison point for binning: fragments land all over the
+/// 28 MiB framebuffer.
+pub fn mlab_unbinned<const M: usize>(
+    stream: &Stream,
+    storage: &mut Vec<Row>,
+    out: &mut [[u8; 4]],
+) -> Result<(), String> {
+    let (w, h) = (stream.width, stream.height);
+    if w >= MAX_EXTENT || h >= MAX_EXTENT {
+        return Err(format!("frame {w}x{h} too large"));
+    }
+    let n = SpanFramebuffer::<M>::rows_needed(w, h).map_err(|e| e.to_string())?;
+    if storage.len() != n {
+        resize(storage, n, Row::EMPTY);
+    }
+    let mut fb = SpanFramebuffer::<M>::new_cleared(storage, w, h).map_err(|e| e.to_string())?;
+    let by_width = Divider::new(w);
+    if !by_width.exact_below(stream.pixels() as u64) {
+        return Err(format!("frame {w}x{h} too large"));
+    }
+    let mut entries = Vec::with_capacity(LANES);
+    for (g, group) in stream.frags.chunks(LANES).enumerate() {
+        let (rows, invalid) = quantize_rows(group);
+        if invalid != 0 {
+            return Err(format!(
+                "fragment {}: invalid",
+                g * LANES + invalid.trailing_zeros() as usize
+            ));
+        }
+        entries.clear();
+        for (f, r) in group.iter().zip(rows) {
+            let y = by_width.div(f.pixel);
+            entries.push(Entry {
+                pos: (f.pixel - y * w) | y << 16,
+                data: r,
+            });
+        }
+        // Groups of 8 stream fragments; a span insert never straddles two groups here.
+        mlab_band(&mut fb, entries.iter()).map_err(|e| e.to_string())?;
+    }
+    fb.resolve_rgba8(out, Background::Opaque(Vec3::from(stream.background)))
+        .map_err(|e| e.to_string())
 }
 
 /// Non-finite results (a half target that overflowed) are shown black, as in the lab.

@@ -8,10 +8,12 @@
 //! - [`metrics`]: RMSE, PSNR, max error, FLIP, background visibility bias.
 //! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.
 //! - [`report`]: the whole evaluation of one stream.
+//! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.
 //! - [`frame`]: whole frames on every core (band-binned, `rayon`), MLAB and the baselines.
 
 #![forbid(unsafe_code)]
 
+pub mod bench;
 pub mod dump;
 pub mod frame;
 pub mod methods;

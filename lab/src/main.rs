@@ -20,6 +20,7 @@ USAGE:
                                             the same comparison on a fragment dump
     oit-lab dump --scene NAME --output FILE [OPTIONS]
                                             write a scene's fragment stream as a dump
+    oit-lab bench [OPTIONS]                 frame-level timings on every core (docs/frame.md)
     oit-lab help | --help | -h              this text; `oit-lab COMMAND --help` for a command
 
 The main job writes OUT/figure.png (Figure 3 grid), OUT/figure-small.png, one PNG per image
@@ -59,6 +60,26 @@ OPTIONS:
 
 Dump format (little endian): magic OITFRAG1, u32 width, u32 height, 3 x f32 background,
 u64 count, then per fragment u32 x, u32 y, f32 depth, 3 x f32 premultiplied color, f32 alpha.
+";
+
+const BENCH_HELP: &str = "\
+oit-lab bench: composite whole frames (band-binned, rayon) with MLAB 4 lanes, the A-buffer,
+WBOIT and OVER; median and spread of repeated runs, thread scaling, memory per frame
+
+USAGE:
+    oit-lab bench [OPTIONS]
+
+OPTIONS:
+    --size WxH        frame size (default 1280x720)
+    --seed N          scene seed (default 1)
+    --scenes A,B,...  scenes (default HAIR,PARTICLES)
+    --threads 1,2,..  thread counts (default 1, 2, 4, 8, 16 up to the machine's cores)
+    --band-lines N    lines per band (default oit_lab::frame::DEFAULT_BAND_LINES)
+    --bands A,B,...   also time MLAB 4 at these band heights (all threads)
+    --warmup N        untimed runs first (default 3)
+    --reps N          timed runs, median reported (default 15)
+    --svg FILE        write the scaling plot there
+    -h, --help        this text
 ";
 
 const DUMP_HELP: &str = "\
@@ -139,7 +160,7 @@ fn parse_seed(a: &mut Args) -> Result<u64, Fail> {
 fn main() -> ExitCode {
     let mut rest: Vec<String> = std::env::args().skip(1).collect();
     let cmd = match rest.first().map(String::as_str) {
-        Some("run") | Some("evaluate") | Some("dump") | Some("help") => rest.remove(0),
+        Some("run") | Some("evaluate") | Some("dump") | Some("bench") | Some("help") => rest.remove(0),
         _ => "run".to_string(),
     };
     let mut args = Args { rest };
@@ -160,6 +181,11 @@ fn main() -> ExitCode {
             print!("{HELP}\n{RUN_HELP}");
             Ok(())
         }
+        "bench" if args.flag(&["-h", "--help"]) => {
+            print!("{BENCH_HELP}");
+            Ok(())
+        }
+        "bench" => cmd_bench(args),
         "evaluate" => cmd_evaluate(args),
         "dump" => cmd_dump(args),
         _ => cmd_run(args),
@@ -325,6 +351,194 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
     }
     if pngs {
         println!("Figure: {}", out.join("figure.png").display());
+    }
+    Ok(())
+}
+
+fn parse_list<T: std::str::FromStr>(a: &mut Args, name: &str) -> Result<Option<Vec<T>>, Fail> {
+    let Some(v) = a.value(name)? else { return Ok(None) };
+    v.split(',')
+        .map(|x| {
+            x.trim()
+                .parse()
+                .map_err(|_| usage(format!("{name}: '{x}' is not a number")))
+        })
+        .collect::<Result<Vec<T>, _>>()
+        .map(Some)
+}
+
+fn cmd_bench(mut a: Args) -> Result<(), Fail> {
+    use oit_lab::bench::{Plan, bands, run, scaling_svg};
+    use oit_lab::frame::{DEFAULT_BAND_LINES, FrameMethod};
+    let size = match a.value("--size")? {
+        Some(s) => parse_size(&s)?,
+        None => (1280, 720),
+    };
+    let seed = parse_seed(&mut a)?;
+    let scenes = match a.value("--scenes")? {
+        Some(list) => list
+            .split(',')
+            .map(|n| Scene::from_name(n.trim()).ok_or_else(|| usage(format!("--scenes: unknown scene '{n}'"))))
+            .collect::<Result<Vec<_>, _>>()?,
+        None => vec![Scene::Hair, Scene::Particles],
+    };
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = parse_list::<usize>(&mut a, "--threads")?
+        .unwrap_or_else(|| [1, 2, 4, 8, 16].into_iter().filter(|&t| t <= cores).collect());
+    if threads.contains(&0) {
+        return Err(usage("--threads: counts must be at least 1"));
+    }
+    let band_lines = parse_list::<u32>(&mut a, "--band-lines")?
+        .and_then(|v| v.first().copied())
+        .unwrap_or(DEFAULT_BAND_LINES);
+    let band_list = parse_list::<u32>(&mut a, "--bands")?;
+    let warmup = parse_list::<usize>(&mut a, "--warmup")?
+        .and_then(|v| v.first().copied())
+        .unwrap_or(3);
+    let reps = parse_list::<usize>(&mut a, "--reps")?
+        .and_then(|v| v.first().copied())
+        .unwrap_or(15);
+    let svg = a.value("--svg")?.map(PathBuf::from);
+    a.finish()?;
+    let plan = Plan {
+        warmup,
+        reps,
+        threads: threads.clone(),
+        band_lines,
+    };
+    println!(
+        "# oit-lab bench: {}x{}, seed {seed}, bands of {band_lines} lines, {warmup} warm-up + {reps} timed runs, \
+         threads {threads:?} ({cores} cores available), lanes backend {}\n",
+        size.0,
+        size.1,
+        mlab::lanes::BACKEND
+    );
+    let mut all = Vec::new();
+    let mut band_rows = Vec::new();
+    for sc in &scenes {
+        let stream = sc.generate(size.0, size.1, seed);
+        stream
+            .validate()
+            .map_err(|(i, e)| runtime(format!("{}: fragment {i}: {e}", sc.name())))?;
+        eprintln!("{}: {} fragments", sc.name(), stream.frags.len());
+        let r = run(sc.name(), &stream, &plan, |m| {
+            eprintln!(
+                "  {} {} threads: {:.2} ms ({:.2} ns/fragment, spread {:.0}%)",
+                m.what,
+                m.threads,
+                m.timing.median * 1e3,
+                m.ns_per_fragment(),
+                m.timing.spread_percent()
+            )
+        })
+        .map_err(runtime)?;
+        all.extend(r);
+        if let Some(list) = &band_list {
+            let t = threads.iter().copied().max().unwrap_or(1);
+            for (l, timing) in bands(&stream, &plan, list, t).map_err(runtime)? {
+                band_rows.push((sc.name(), l, t, stream.frags.len(), timing));
+            }
+        }
+    }
+    // Frame-level table.
+    println!("## Frame timings (median of {reps}, spread = (max - min) / median)\n");
+    println!(
+        "| scene | method | threads | ms (median) | min - max ms | spread | ns / fragment | frames / s | memory / frame | time / MLAB 4 |"
+    );
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for m in &all {
+        let fragments = m.fragments;
+        let px = size.0 as usize * size.1 as usize;
+        let mem = FrameMethod::ALL
+            .into_iter()
+            .find(|f| m.what == f.name())
+            .map_or("-".to_string(), |f| {
+                format!("{:.1} MiB", f.frame_bytes(px, fragments) as f64 / 1048576.0)
+            });
+        let mlab = all
+            .iter()
+            .find(|x| x.scene == m.scene && x.threads == m.threads && x.what == FrameMethod::Mlab4.name());
+        let ratio = mlab.map_or("-".to_string(), |x| {
+            format!("{:.2}x", m.timing.median / x.timing.median)
+        });
+        println!(
+            "| {} ({:.2} M frags) | {} | {} | {:.2} | {:.2} - {:.2} | {:.0}% | {:.2} | {:.1} | {mem} | {ratio} |",
+            m.scene,
+            fragments as f64 / 1e6,
+            m.what,
+            m.threads,
+            m.timing.median * 1e3,
+            m.timing.min * 1e3,
+            m.timing.max * 1e3,
+            m.timing.spread_percent(),
+            m.ns_per_fragment(),
+            1.0 / m.timing.median,
+        );
+    }
+    println!("\n## Scaling (speedup and parallel efficiency over 1 thread)\n");
+    println!("| scene | method | threads | speedup | efficiency |\n|---|---|---:|---:|---:|");
+    for m in all.iter().filter(|m| m.threads > 1) {
+        if let Some(one) = all
+            .iter()
+            .find(|x| x.scene == m.scene && x.what == m.what && x.threads == 1)
+        {
+            let s = one.timing.median / m.timing.median;
+            println!(
+                "| {} | {} | {} | {:.2} | {:.0}% |",
+                m.scene,
+                m.what,
+                m.threads,
+                s,
+                100.0 * s / m.threads as f64
+            );
+        }
+    }
+    if !band_rows.is_empty() {
+        println!(
+            "\n## MLAB 4: band height\n\n| scene | lines per band | threads | ms (median) | spread | ns / fragment |\n|---|---:|---:|---:|---:|---:|"
+        );
+        for (scene, l, t, n, timing) in &band_rows {
+            println!(
+                "| {scene} | {l} | {t} | {:.2} | {:.0}% | {:.2} |",
+                timing.median * 1e3,
+                timing.spread_percent(),
+                timing.median * 1e9 / *n as f64
+            );
+        }
+    }
+    println!(
+        "\n## Memory per frame at {}x{} (the paper's Table 1 accounting)\n",
+        size.0, size.1
+    );
+    println!("| method | bytes / pixel | MB (MiB) per frame |\n|---|---:|---:|");
+    let px = size.0 as f64 * size.1 as f64;
+    for (name, bpp) in [
+        ("MLAB 2 rows (RGBA8 + f32 depth per row)", 16.0),
+        ("MLAB 4 rows", 32.0),
+        ("MLAB 8 rows", 64.0),
+        ("OVER RGBA16F", 8.0),
+        ("WBOIT RGBA16F + R8", 9.0),
+    ] {
+        println!("| {name} | {bpp} | {:.1} |", bpp * px / 1048576.0);
+    }
+    for m in all
+        .iter()
+        .filter(|m| m.what == FrameMethod::ABuffer.name() && m.threads == threads[0])
+    {
+        let bytes = FrameMethod::ABuffer.frame_bytes(size.0 as usize * size.1 as usize, m.fragments);
+        println!(
+            "| A-buffer on {} (12 B x {} fragments + 4 B head per pixel) | {:.1} | {:.1} |",
+            m.scene,
+            m.fragments,
+            bytes as f64 / px,
+            bytes as f64 / 1048576.0
+        );
+    }
+    if let Some(path) = svg {
+        let title = format!("Frame compositing, {}x{}, {} cores", size.0, size.1, cores);
+        std::fs::write(&path, scaling_svg(&all, &title))
+            .map_err(|e| runtime(format!("cannot write {}: {e}", path.display())))?;
+        println!("\nScaling plot: {}", path.display());
     }
     Ok(())
 }
