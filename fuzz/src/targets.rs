@@ -4,8 +4,9 @@
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::{
-    Background, BlendingArray, Fragment, FramebufferError, Hybrid, HybridFramebuffer, MlabFramebuffer, Resolved, Row,
-    Tail, hybrid, mlab as mlab_mod, resolve_rows, to_rgba8, to_rgba16f,
+    Background, BlendingArray, Fragment, FramebufferError, Hybrid, HybridFramebuffer, HybridSpanFramebuffer,
+    MlabFramebuffer, Resolved, Row, SpanFramebuffer, Tail, hybrid, mlab as mlab_mod, resolve_rows, to_rgba8,
+    to_rgba16f,
 };
 
 use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan};
@@ -624,6 +625,31 @@ pub trait Layout {
     /// a lanes span (lanes outside the buffer hold a sentinel), insert `row` in the lanes of
     /// `mask` that are inside, check that every other lane is unchanged, scatter back.
     fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8);
+    /// `rows_needed` of the span framebuffer.
+    fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError>;
+    /// `insert_span` of the span framebuffer over `s`.
+    fn span_insert(
+        s: &mut [Row],
+        w: u32,
+        h: u32,
+        x: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        mask: u8,
+    ) -> Result<(), FramebufferError>;
+    /// The resolve writers of the span framebuffer (as [`Layout::resolve_all`]).
+    fn span_resolve_all(
+        s: &mut [Row],
+        w: u32,
+        h: u32,
+        which: u8,
+        out: &mut [Vec4],
+        bg: Background,
+    ) -> Result<(), FramebufferError>;
+    /// `clear` of the span framebuffer.
+    fn span_clear(s: &mut [Row], w: u32, h: u32);
+    /// `pixel(x, y)` of the span framebuffer as `SLOTS` rows (HT: head rows, then the tail).
+    fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError>;
 }
 
 /// Lanes of the span `x0 .. x0 + 8` that lie inside a `w x h` buffer on line `y`.
@@ -677,6 +703,42 @@ impl<const M: usize> Layout for MlabLayout<M> {
         M as f32
     }
     type View<'a> = MlabFramebuffer<'a, M>;
+    fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
+        SpanFramebuffer::<M>::rows_needed(w, h)
+    }
+    fn span_insert(
+        s: &mut [Row],
+        w: u32,
+        h: u32,
+        x: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        mask: u8,
+    ) -> Result<(), FramebufferError> {
+        SpanFramebuffer::<M>::new(s, w, h)
+            .expect("span storage")
+            .insert_span(x, y, rows, mask)
+    }
+    fn span_resolve_all(
+        s: &mut [Row],
+        w: u32,
+        h: u32,
+        which: u8,
+        out: &mut [Vec4],
+        bg: Background,
+    ) -> Result<(), FramebufferError> {
+        let v = SpanFramebuffer::<M>::new(s, w, h).expect("span storage");
+        resolve_all_impl!(v, which, out, bg)
+    }
+    fn span_clear(s: &mut [Row], w: u32, h: u32) {
+        SpanFramebuffer::<M>::new(s, w, h).expect("span storage").clear()
+    }
+    fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
+        SpanFramebuffer::<M>::new(s, w, h)
+            .expect("span storage")
+            .pixel(x, y)
+            .map(|p| p.to_vec())
+    }
     fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError> {
         MlabFramebuffer::new(s, w, h)
     }
@@ -740,6 +802,44 @@ impl<const K: usize> Layout for HybridLayout<K> {
         K as f32 + tail_color_limit()
     }
     type View<'a> = HybridFramebuffer<'a, K>;
+    fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
+        HybridSpanFramebuffer::<K>::rows_needed(w, h)
+    }
+    fn span_insert(
+        s: &mut [Row],
+        w: u32,
+        h: u32,
+        x: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        mask: u8,
+    ) -> Result<(), FramebufferError> {
+        HybridSpanFramebuffer::<K>::new(s, w, h)
+            .expect("span storage")
+            .insert_span(x, y, rows, mask)
+    }
+    fn span_resolve_all(
+        s: &mut [Row],
+        w: u32,
+        h: u32,
+        which: u8,
+        out: &mut [Vec4],
+        bg: Background,
+    ) -> Result<(), FramebufferError> {
+        let v = HybridSpanFramebuffer::<K>::new(s, w, h).expect("span storage");
+        resolve_all_impl!(v, which, out, bg)
+    }
+    fn span_clear(s: &mut [Row], w: u32, h: u32) {
+        HybridSpanFramebuffer::<K>::new(s, w, h).expect("span storage").clear()
+    }
+    fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
+        let (head, tail) = HybridSpanFramebuffer::<K>::new(s, w, h)
+            .expect("span storage")
+            .pixel(x, y)?;
+        let mut v = head.to_vec();
+        v.push(Row::from_bytes(tail.to_bytes()));
+        Ok(v)
+    }
     fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError> {
         HybridFramebuffer::new(s, w, h)
     }
@@ -882,6 +982,43 @@ fn spans<L: Layout>(input: &mut Input) {
         }
     }
     let pixel = |x: u32, y: u32| GUARD + (y as usize * w as usize + x as usize) * L::SLOTS;
+    // The same pixels in a span framebuffer (lanes arrangement), placed by the documented
+    // formula `((y * spans + x / 8) * R + j) * 8 + x % 8`; padding lanes hold a sentinel
+    // that no insert may touch.
+    let spans_per_line = (w as usize).div_ceil(LANES);
+    let slen = spans_per_line * LANES * h as usize * L::SLOTS;
+    assert_eq!(L::span_rows_needed(w, h), Ok(slen));
+    let sidx = |x: usize, y: usize, j: usize| ((y * spans_per_line + x / LANES) * L::SLOTS + j) * LANES + x % LANES;
+    let mut sbuf = vec![sentinel(7, 7); slen];
+    for y in 0..h as usize {
+        for x in 0..w as usize {
+            for j in 0..L::SLOTS {
+                sbuf[sidx(x, y, j)] = buf[pixel(x as u32, y as u32) + j];
+            }
+        }
+    }
+    let span_matches = |sbuf: &[Row], buf: &[Row], context: &dyn core::fmt::Debug| {
+        for y in 0..h as usize {
+            for x in 0..w as usize {
+                for j in 0..L::SLOTS {
+                    assert_eq!(
+                        sbuf[sidx(x, y, j)],
+                        buf[pixel(x as u32, y as u32) + j],
+                        "span fb pixel ({x}, {y}) slot {j} after {context:?}"
+                    );
+                }
+            }
+            for x in w as usize..spans_per_line * LANES {
+                for j in 0..L::SLOTS {
+                    assert_eq!(
+                        sbuf[sidx(x, y, j)],
+                        sentinel(7, 7),
+                        "padding lane ({x}, {y}) written after {context:?}"
+                    );
+                }
+            }
+        }
+    };
     for _ in 0..32 {
         let Some(op) = input.u8() else { break };
         let before = buf.clone();
@@ -902,6 +1039,38 @@ fn spans<L: Layout>(input: &mut Input) {
                 let mut lanes_buf = before.clone();
                 L::lanes_span(&mut lanes_buf[GUARD..GUARD + len], w, h, x0, y, f.row(), span_mask);
                 lanes_result = Some(lanes_buf);
+                // The span framebuffer: refused (and unchanged) if an on lane is outside, then
+                // the same span with those lanes off.
+                let rows8 = lane_rows(f.row(), span_mask);
+                let top = (0..LANES as u32).filter(|&l| span_mask >> l & 1 == 1).max();
+                let expected_err = if y >= h {
+                    Some(FramebufferError::OutOfBounds {
+                        x: x0,
+                        y,
+                        width: w,
+                        height: h,
+                    })
+                } else {
+                    top.filter(|&l| x0 + l >= w).map(|l| FramebufferError::OutOfBounds {
+                        x: x0 + l,
+                        y,
+                        width: w,
+                        height: h,
+                    })
+                };
+                let sbefore = sbuf.clone();
+                let got = L::span_insert(&mut sbuf, w, h, x0, y, &rows8, span_mask);
+                match expected_err {
+                    Some(e) => {
+                        assert_eq!(got, Err(e), "span ({x0}, {y}) mask {span_mask:#010b} in {w}x{h}");
+                        assert_eq!(sbuf, sbefore, "a refused span changed the span framebuffer");
+                        let on = span_mask & inside(w, h, x0, y);
+                        if on != 0 {
+                            assert_eq!(L::span_insert(&mut sbuf, w, h, x0, y, &rows8, on), Ok(()));
+                        }
+                    }
+                    None => assert_eq!(got, Ok(())),
+                }
                 for lane in 0..n {
                     let x = x0 + lane;
                     if mask >> lane & 1 == 0 {
@@ -941,9 +1110,16 @@ fn spans<L: Layout>(input: &mut Input) {
                 } else {
                     Background::Opaque(Vec3::splat(f32::from(b) / 254.0))
                 };
-                let sentinel = Vec4::new(7.0, 7.0, 7.0, 7.0);
-                let mut out = vec![sentinel; n];
+                let sentinel_px = Vec4::new(7.0, 7.0, 7.0, 7.0);
+                let mut out = vec![sentinel_px; n];
                 let got = L::resolve_all(&v, which, &mut out, bg);
+                let mut sout = vec![sentinel_px; n];
+                assert_eq!(
+                    L::span_resolve_all(&mut sbuf, w, h, which, &mut sout, bg),
+                    got,
+                    "span fb resolve result"
+                );
+                assert_eq!(sout, out, "span fb resolve differs from the pixel-major resolve");
                 if n != pixels {
                     assert_eq!(
                         got,
@@ -952,7 +1128,10 @@ fn spans<L: Layout>(input: &mut Input) {
                             actual: n
                         })
                     );
-                    assert!(out.iter().all(|&p| p == sentinel), "a refused resolve wrote its output");
+                    assert!(
+                        out.iter().all(|&p| p == sentinel_px),
+                        "a refused resolve wrote its output"
+                    );
                 } else {
                     assert_eq!(got, Ok(()));
                     for y in 0..h {
@@ -976,6 +1155,21 @@ fn spans<L: Layout>(input: &mut Input) {
                     break;
                 };
                 let (x, y) = (u32::from(x), u32::from(y) % (h + 2));
+                let sp = L::span_pixel(&mut sbuf, w, h, x, y);
+                if x < w && y < h {
+                    let p = pixel(x, y);
+                    assert_eq!(sp, Ok(before[p..p + L::SLOTS].to_vec()), "span fb pixel ({x}, {y})");
+                } else {
+                    assert_eq!(
+                        sp,
+                        Err(FramebufferError::OutOfBounds {
+                            x,
+                            y,
+                            width: w,
+                            height: h
+                        })
+                    );
+                }
                 if x >= w || y >= h {
                     assert_eq!(
                         L::resolve(&v, x, y),
@@ -989,6 +1183,15 @@ fn spans<L: Layout>(input: &mut Input) {
                 }
             }
             _ => {
+                L::span_clear(&mut sbuf, w, h);
+                for y in 0..h as usize {
+                    for x in w as usize..spans_per_line * LANES {
+                        for j in 0..L::SLOTS {
+                            // Clearing resets the padding too; put the sentinel back.
+                            sbuf[sidx(x, y, j)] = sentinel(7, 7);
+                        }
+                    }
+                }
                 L::clear(&mut v);
                 for p in 0..(w * h) as usize {
                     let p = GUARD + p * L::SLOTS;
@@ -1007,6 +1210,7 @@ fn spans<L: Layout>(input: &mut Input) {
             buf, expected,
             "{w}x{h}: pixels differ from the per-pixel reference after op {op}"
         );
+        span_matches(&sbuf, &buf, &op);
         if let Some(lanes_buf) = lanes_result {
             assert_eq!(
                 lanes_buf, buf,
