@@ -520,6 +520,59 @@ fn lanes_invalid_fragments_and_off_lanes() {
     assert_eq!(ht, HybridSpan::<1>::new());
 }
 
+#[test]
+fn span_with_lanes_outside_the_buffer() {
+    use mlab::SpanFramebuffer;
+    use mlab::lanes::LANES;
+    let (w, h) = (13, 2); // two spans per line, the second one partial (5 pixels, 3 padding lanes)
+    let mut storage = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(w, h).unwrap()];
+    assert_eq!(storage.len(), 2 * 8 * 2 * 2);
+    let row = Row::new([9, 0, 0], 100, 1.0);
+    let mut fb = SpanFramebuffer::<2>::new_cleared(&mut storage, w, h).unwrap();
+    // Lane 4 of a span at x = 9 is x = 13, outside: the whole span is refused.
+    let e = FbE::OutOfBounds {
+        x: 13,
+        y: 1,
+        width: 13,
+        height: 2,
+    };
+    assert_eq!(fb.insert_span(9, 1, &[row; LANES], 0b1_1111), Err(e));
+    // A line outside is refused even with no lane on.
+    assert_eq!(
+        fb.insert_span(0, 2, &[row; LANES], 0),
+        Err(FbE::OutOfBounds {
+            x: 0,
+            y: 2,
+            width: 13,
+            height: 2
+        })
+    );
+    assert!(
+        fb.as_rows().iter().all(|r| r.is_empty()),
+        "a refused span changed the storage"
+    );
+    // The same span with the outside lane off: lanes 0..4 are written, nothing else.
+    assert_eq!(fb.insert_span(9, 1, &[row; LANES], 0b1111), Ok(()));
+    for x in 0..w {
+        let want = if x >= 9 { [row, Row::EMPTY] } else { [Row::EMPTY; 2] };
+        assert_eq!(fb.pixel(x, 1), Ok(want), "x = {x}");
+    }
+    assert_eq!(
+        fb.as_rows().iter().filter(|r| !r.is_empty()).count(),
+        4,
+        "padding lanes written"
+    );
+    assert_eq!(
+        fb.pixel(13, 1),
+        Err(FbE::OutOfBounds {
+            x: 13,
+            y: 1,
+            width: 13,
+            height: 2
+        })
+    );
+}
+
 // ---- Findings: regression tests for fixed ones, reproducers (ignored) for open ones ----
 
 /// F1 (fixed in d37150f): `Tail::resolve` amplified the tail's light above the documented
