@@ -27,6 +27,9 @@ pub struct Timing {
     pub min: f64,
     /// Slowest.
     pub max: f64,
+    /// CPU time of the process over wall time of the timed runs (Linux; NaN elsewhere): about
+    /// the thread count when the machine was ours, less when other work shared the cores.
+    pub cpu_per_wall: f64,
 }
 
 impl Timing {
@@ -42,6 +45,7 @@ impl Timing {
             (samples[n / 2 - 1] + samples[n / 2]) / 2.0
         };
         Timing {
+            cpu_per_wall: f64::NAN,
             median,
             min: samples.first().copied().unwrap_or(f64::NAN),
             max: samples.last().copied().unwrap_or(f64::NAN),
@@ -60,12 +64,39 @@ pub fn time<F: FnMut() -> Result<(), String>>(warmup: usize, reps: usize, mut f:
         f()?;
     }
     let mut samples = Vec::with_capacity(reps);
+    let cpu0 = process_cpu_seconds();
     for _ in 0..reps.max(1) {
         let t = Instant::now();
         f()?;
         samples.push(t.elapsed().as_secs_f64());
     }
-    Ok(Timing::of(samples))
+    let wall: f64 = samples.iter().sum();
+    let cpu = process_cpu_seconds() - cpu0;
+    Ok(Timing {
+        cpu_per_wall: cpu / wall,
+        ..Timing::of(samples)
+    })
+}
+
+/// User + system CPU seconds of this process (`/proc/self/stat`, 100 ticks per second),
+/// NaN where unavailable.
+pub fn process_cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return f64::NAN;
+    };
+    // Fields after the command name (which is in parentheses and may hold spaces).
+    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+        return f64::NAN;
+    };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // utime and stime are fields 14 and 15 of the line, 12 and 13 after the name.
+    match (
+        f.get(11).and_then(|x| x.parse::<f64>().ok()),
+        f.get(12).and_then(|x| x.parse::<f64>().ok()),
+    ) {
+        (Some(u), Some(s)) => (u + s) / 100.0,
+        _ => f64::NAN,
+    }
 }
 
 /// A `rayon` pool of `threads` threads.

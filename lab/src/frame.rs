@@ -23,7 +23,7 @@
 //! The result is byte-identical to inserting the whole stream, fragment by fragment, into
 //! one framebuffer on one thread (tested in `lab/tests/frame.rs`). A band of `band_lines`
 //! full lines is the tile: with `M = 4` and 1280 pixels a line holds 40 KiB of blending
-//! arrays, so a band of 8 lines (320 KiB) stays in a core's L2 from its clear through its
+//! arrays, so a band of 16 lines (640 KiB) stays in a core's L2 from its clear through its
 //! inserts to its resolve. [`DEFAULT_BAND_LINES`] was picked by measurement
 //! (`oit-lab bench --bands`, `docs/frame.md`).
 //!
@@ -53,7 +53,7 @@ use rayon::prelude::*;
 
 /// Lines per band when none is given: the fastest on the development machine for MLAB 4 at
 /// 1280x720 on HAIR and PARTICLES (`docs/frame.md`).
-pub const DEFAULT_BAND_LINES: u32 = 8;
+pub const DEFAULT_BAND_LINES: u32 = 16;
 
 /// Fragments per binning chunk (a unit of parallel binning work) by default.
 pub const CHUNK: usize = 1 << 15;

@@ -462,7 +462,7 @@ fn cmd_bench(mut a: Args) -> Result<(), Fail> {
             format!("{:.2}x", m.timing.median / x.timing.median)
         });
         println!(
-            "| {} ({:.2} M frags) | {} | {} | {:.2} | {:.2} - {:.2} | {:.0}% | {:.2} | {:.1} | {mem} | {ratio} |",
+            "| {} ({:.2} M frags) | {} | {} | {:.2} | {:.2} - {:.2} | {:.0}% | {:.2} | {:.2} | {:.1} | {mem} | {ratio} |",
             m.scene,
             fragments as f64 / 1e6,
             m.what,
@@ -471,6 +471,7 @@ fn cmd_bench(mut a: Args) -> Result<(), Fail> {
             m.timing.min * 1e3,
             m.timing.max * 1e3,
             m.timing.spread_percent(),
+            m.timing.cpu_per_wall,
             m.ns_per_fragment(),
             1.0 / m.timing.median,
         );
