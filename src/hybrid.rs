@@ -30,7 +30,7 @@
 //! [`Hybrid`] do not depend on submission order.
 
 use crate::fragment::Fragment;
-use crate::lanes::{FloatLanes, RowLanes};
+use crate::lanes::{FloatLanes, RowLanes, Slot};
 use crate::resolve::{INV255, Resolved};
 use crate::row::Row;
 use bytemuck::{Pod, Zeroable};
@@ -265,17 +265,23 @@ pub fn insert<const K: usize>(head: &mut [Row; K], tail: &mut Tail, row: Row) {
 
 /// Listing 2, written once for every lane width; lanes where `on` is false are untouched.
 #[inline(always)]
-pub(crate) fn insert_lanes<L: RowLanes, const K: usize>(b: &mut [L; K], tail: &mut L::Tail, fragment: L, on: L::Mask) {
+pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, T: Slot<L::Tail>, const K: usize>(
+    b: &mut [S; K],
+    tail: &mut T,
+    fragment: L,
+    on: L::Mask,
+) {
     let mut f = fragment;
-    // 1-pass bubble sort to insert fragment
+    // 1-pass bubble sort to insert fragment, one layer at a time.
     for slot in b.iter_mut() {
-        let swap = f.depth_le(*slot) & on;
-        let front = L::select(swap, f, *slot);
-        f = L::select(swap, *slot, f);
-        *slot = front;
+        let row = slot.load();
+        let swap = f.depth_le(row) & on;
+        slot.store(L::select(swap, f, row));
+        f = L::select(swap, row, f);
     }
     // Update tail if the row pushed out carries color or opacity.
-    *tail = L::select_tail(on, L::tail_add(*tail, f), *tail);
+    let t = tail.load();
+    tail.store(L::select_tail(on, L::tail_add(t, f), t));
 }
 
 /// Resolve head and tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`, where

@@ -113,6 +113,60 @@ impl RowLanes for Row {
     }
 }
 
+/// Where the rows of one layer live: Listings 1 and 2 load a layer, update it, and store it
+/// back before the next one, so only one layer and the carried row are ever held in
+/// registers (an array of `M` layers would spill, and copy, at large `M`).
+pub(crate) trait Slot<L> {
+    /// Read the layer.
+    fn load(&self) -> L;
+    /// Write the layer.
+    fn store(&mut self, value: L);
+}
+
+impl Slot<Row> for Row {
+    #[inline(always)]
+    fn load(&self) -> Row {
+        *self
+    }
+    #[inline(always)]
+    fn store(&mut self, value: Row) {
+        *self = value;
+    }
+}
+
+impl Slot<Tail> for Tail {
+    #[inline(always)]
+    fn load(&self) -> Tail {
+        *self
+    }
+    #[inline(always)]
+    fn store(&mut self, value: Tail) {
+        *self = value;
+    }
+}
+
+impl Slot<Rows8> for [Row; LANES] {
+    #[inline(always)]
+    fn load(&self) -> Rows8 {
+        Rows8::load(self)
+    }
+    #[inline(always)]
+    fn store(&mut self, value: Rows8) {
+        *self = value.store();
+    }
+}
+
+impl Slot<Rows8> for [Tail; LANES] {
+    #[inline(always)]
+    fn load(&self) -> Rows8 {
+        Rows8::load_tails(self)
+    }
+    #[inline(always)]
+    fn store(&mut self, value: Rows8) {
+        *self = value.store_tails();
+    }
+}
+
 /// f32 values of one or more pixels: what the resolve is written over.
 pub(crate) trait FloatLanes:
     Copy + core::ops::Add<Output = Self> + core::ops::Sub<Output = Self> + core::ops::Mul<Output = Self>
@@ -435,16 +489,12 @@ impl<const K: usize> Default for HybridSpan<K> {
 /// set in `mask`. Byte-identical to [`crate::mlab::insert`] on each lane, for any rows.
 #[inline]
 pub fn mlab_insert<const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
-    let mut b: [Rows8; M] = span.map(|layer| Rows8::load(&layer));
     // Full spans (the common case) skip the mask: with a constant all-ones mask the
     // compiler drops the ANDs and the final select.
     if mask == 0xff {
-        crate::mlab::insert_lanes(&mut b, Rows8::load(rows), Mask8::ALL);
+        crate::mlab::insert_lanes(span, Rows8::load(rows), Mask8::ALL);
     } else {
-        crate::mlab::insert_lanes(&mut b, Rows8::load(rows), Mask8::from_bits(mask));
-    }
-    for (layer, r) in span.iter_mut().zip(b) {
-        *layer = r.store();
+        crate::mlab::insert_lanes(span, Rows8::load(rows), Mask8::from_bits(mask));
     }
 }
 
@@ -463,17 +513,11 @@ pub fn hybrid_insert_parts<const K: usize>(
     rows: &[Row; LANES],
     mask: u8,
 ) {
-    let mut h: [Rows8; K] = head.map(|layer| Rows8::load(&layer));
-    let mut t = Rows8::load_tails(tails);
     if mask == 0xff {
-        crate::hybrid::insert_lanes(&mut h, &mut t, Rows8::load(rows), Mask8::ALL);
+        crate::hybrid::insert_lanes(head, tails, Rows8::load(rows), Mask8::ALL);
     } else {
-        crate::hybrid::insert_lanes(&mut h, &mut t, Rows8::load(rows), Mask8::from_bits(mask));
+        crate::hybrid::insert_lanes(head, tails, Rows8::load(rows), Mask8::from_bits(mask));
     }
-    for (layer, r) in head.iter_mut().zip(h) {
-        *layer = r.store();
-    }
-    *tails = t.store_tails();
 }
 
 /// Eight fragments, structure of arrays (premultiplied color unless quantized with

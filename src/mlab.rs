@@ -22,7 +22,7 @@
 //! [`Row::EMPTY`] and only at the back.
 
 use crate::fragment::Fragment;
-use crate::lanes::RowLanes;
+use crate::lanes::{RowLanes, Slot};
 use crate::resolve::{Resolved, resolve_rows};
 use crate::row::Row;
 use crate::unorm::mul;
@@ -72,19 +72,21 @@ pub fn insert<const M: usize>(rows: &mut [Row; M], row: Row) {
 /// [`crate::lanes`]): lanes where `on` is false are left untouched. The swap of the listing
 /// is two selects on the same condition, so this is the listing step for step, for any rows.
 #[inline(always)]
-pub(crate) fn insert_lanes<L: RowLanes, const M: usize>(b: &mut [L; M], fragment: L, on: L::Mask) {
+pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, const M: usize>(b: &mut [S; M], fragment: L, on: L::Mask) {
     let () = AtLeastOne::<M>::OK;
     let mut f = fragment;
-    // 1-pass bubble sort to insert fragment
-    for slot in b.iter_mut() {
-        let swap = f.depth_le(*slot) & on; // if (f.z <= B[i].z)
-        let front = L::select(swap, f, *slot); // B[i] = f
-        f = L::select(swap, *slot, f); // f = temp
-        *slot = front;
-    }
-    // Compression (merge last two rows): `f` is the row pushed out, B[m] in the listing.
-    if let Some(last) = b.last_mut() {
-        *last = L::select(on, L::merge(*last, f), *last);
+    // 1-pass bubble sort to insert fragment, one layer at a time.
+    for (i, slot) in b.iter_mut().enumerate() {
+        let row = slot.load();
+        let swap = f.depth_le(row) & on; // if (f.z <= B[i].z)
+        let front = L::select(swap, f, row); // B[i] = f
+        f = L::select(swap, row, f); // f = temp
+        if i + 1 < M {
+            slot.store(front);
+        } else {
+            // Compression (merge last two rows): `f` is the row pushed out, B[m] in the listing.
+            slot.store(L::select(on, L::merge(front, f), front));
+        }
     }
 }
 
