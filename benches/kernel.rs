@@ -281,6 +281,20 @@ fn insert_small(c: &mut Criterion) {
     g.finish();
 }
 
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
+fn resolve_scalar(out: &mut [[u8; 4]], pixels: &[[Row; 4]], bg: Background) {
+    for (o, p) in out.iter_mut().zip(pixels) {
+        *o = to_rgba8(resolve_rows(p).pixel(bg));
+    }
+}
+
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
+fn resolve_lanes(out: &mut [[u8; 4]], spans: &[MlabSpan<4>], bg: Background) {
+    for (o, s) in out.chunks_exact_mut(LANES).zip(spans) {
+        o.copy_from_slice(&lanes::mlab_resolve_rgba8(s, bg));
+    }
+}
+
 fn resolve(c: &mut Criterion) {
     let stream = random_stream(SPANS);
     let mut pixels = vec![[Row::EMPTY; 4]; W * H];
@@ -294,18 +308,10 @@ fn resolve(c: &mut Criterion) {
     let mut g = c.benchmark_group("resolve_rgba8");
     g.throughput(Throughput::Elements((W * H) as u64));
     g.bench_function(BenchmarkId::new("mlab_scalar", 4), |b| {
-        b.iter(|| {
-            for (o, p) in out.iter_mut().zip(black_box(&pixels)) {
-                *o = to_rgba8(resolve_rows(p).pixel(bg));
-            }
-        })
+        b.iter(|| resolve_scalar(&mut out, black_box(&pixels), bg))
     });
     g.bench_function(BenchmarkId::new("mlab_lanes", 4), |b| {
-        b.iter(|| {
-            for (o, s) in out.chunks_exact_mut(LANES).zip(black_box(&spans)) {
-                o.copy_from_slice(&lanes::mlab_resolve_rgba8(s, bg));
-            }
-        })
+        b.iter(|| resolve_lanes(&mut out, black_box(&spans), bg))
     });
     let mut hp = vec![([Row::EMPTY; 3], Tail::EMPTY); W * H];
     hybrid_scalar::<3>(&mut hp, &stream);

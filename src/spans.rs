@@ -156,6 +156,60 @@ fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
     r
 }
 
+/// Constructors and accessors shared by both span framebuffers.
+macro_rules! span_common {
+    () => {
+        /// [`new`](Self::new), then [`clear`](Self::clear): the way to start a frame.
+        pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+            let mut fb = Self::new(storage, width, height)?;
+            fb.clear();
+            Ok(fb)
+        }
+
+        /// Width in pixels.
+        pub fn width(&self) -> u32 {
+            self.dims.width
+        }
+
+        /// Height in pixels.
+        pub fn height(&self) -> u32 {
+            self.dims.height
+        }
+    };
+}
+
+/// The inserts both span framebuffers build on their `insert_span`.
+macro_rules! span_inserts {
+    () => {
+        /// Validate, quantize and insert one fragment per lane; returns the lanes that were on
+        /// but invalid (left untouched). Coordinates are checked first, for every lane that is on.
+        #[inline]
+        pub fn insert_span_fragments(
+            &mut self,
+            x: u32,
+            y: u32,
+            fragments: &FragmentLanes,
+            mask: u8,
+        ) -> Result<u8, FramebufferError> {
+            self.dims.split(x, y, mask)?;
+            let q = fragments.quantize(mask);
+            self.insert_span(x, y, &q.rows, q.valid)?;
+            Ok(q.invalid)
+        }
+
+        /// Insert one quantized row at `(x, y)`.
+        pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+            let (_, lane) = self.dims.locate(x, y)?;
+            self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
+        }
+
+        /// Insert one fragment at `(x, y)`.
+        pub fn insert(&mut self, x: u32, y: u32, fragment: &crate::Fragment) -> Result<(), FramebufferError> {
+            self.insert_row(x, y, fragment.row())
+        }
+    };
+}
+
 /// An MLAB framebuffer in 8-pixel layer-major spans over borrowed storage (see the
 /// [module docs](self) for the arrangement).
 #[derive(Debug)]
@@ -190,22 +244,7 @@ impl<'a, const M: usize> SpanFramebuffer<'a, M> {
         Ok(SpanFramebuffer { spans, dims })
     }
 
-    /// [`new`](Self::new), then [`clear`](Self::clear).
-    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
-        let mut fb = Self::new(storage, width, height)?;
-        fb.clear();
-        Ok(fb)
-    }
-
-    /// Width in pixels.
-    pub fn width(&self) -> u32 {
-        self.dims.width
-    }
-
-    /// Height in pixels.
-    pub fn height(&self) -> u32 {
-        self.dims.height
-    }
+    span_common!();
 
     /// Every row empty (padding lanes included).
     pub fn clear(&mut self) {
@@ -231,32 +270,7 @@ impl<'a, const M: usize> SpanFramebuffer<'a, M> {
         Ok(())
     }
 
-    /// Validate, quantize and insert one fragment per lane; returns the lanes that were on
-    /// but invalid (left untouched). Coordinates are checked first, for every lane that is on.
-    #[inline]
-    pub fn insert_span_fragments(
-        &mut self,
-        x: u32,
-        y: u32,
-        fragments: &FragmentLanes,
-        mask: u8,
-    ) -> Result<u8, FramebufferError> {
-        self.dims.split(x, y, mask)?;
-        let q = fragments.quantize(mask);
-        self.insert_span(x, y, &q.rows, q.valid)?;
-        Ok(q.invalid)
-    }
-
-    /// Insert one quantized row at `(x, y)`.
-    pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
-        let (_, lane) = self.dims.locate(x, y)?;
-        self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
-    }
-
-    /// Insert one fragment at `(x, y)`.
-    pub fn insert(&mut self, x: u32, y: u32, fragment: &crate::Fragment) -> Result<(), FramebufferError> {
-        self.insert_row(x, y, fragment.row())
-    }
+    span_inserts!();
 
     /// The blending array of pixel `(x, y)`.
     pub fn pixel(&self, x: u32, y: u32) -> Result<[Row; M], FramebufferError> {
@@ -424,22 +438,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
         Ok(HybridSpanFramebuffer { rows: storage, dims })
     }
 
-    /// [`new`](Self::new), then [`clear`](Self::clear).
-    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
-        let mut fb = Self::new(storage, width, height)?;
-        fb.clear();
-        Ok(fb)
-    }
-
-    /// Width in pixels.
-    pub fn width(&self) -> u32 {
-        self.dims.width
-    }
-
-    /// Height in pixels.
-    pub fn height(&self) -> u32 {
-        self.dims.height
-    }
+    span_common!();
 
     /// Empty head rows and empty tails everywhere.
     pub fn clear(&mut self) {
@@ -482,31 +481,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
         Ok(())
     }
 
-    /// Validate, quantize and insert one fragment per lane; returns the invalid lanes.
-    #[inline]
-    pub fn insert_span_fragments(
-        &mut self,
-        x: u32,
-        y: u32,
-        fragments: &FragmentLanes,
-        mask: u8,
-    ) -> Result<u8, FramebufferError> {
-        self.dims.split(x, y, mask)?;
-        let q = fragments.quantize(mask);
-        self.insert_span(x, y, &q.rows, q.valid)?;
-        Ok(q.invalid)
-    }
-
-    /// Insert one quantized row at `(x, y)`.
-    pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
-        let (_, lane) = self.dims.locate(x, y)?;
-        self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
-    }
-
-    /// Insert one fragment at `(x, y)`.
-    pub fn insert(&mut self, x: u32, y: u32, fragment: &crate::Fragment) -> Result<(), FramebufferError> {
-        self.insert_row(x, y, fragment.row())
-    }
+    span_inserts!();
 
     /// Head rows and tail of pixel `(x, y)`.
     pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], Tail), FramebufferError> {
