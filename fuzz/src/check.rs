@@ -143,9 +143,8 @@ pub fn check_resolved(r: Resolved, max_color: f32, context: &dyn core::fmt::Debu
 
 /// `|got - want| <= bound` for color channels and transmittance.
 pub fn check_close(got: Resolved, want: ([f64; 3], f64), bound: f64, context: &dyn core::fmt::Debug) {
-    let g = got.color.to_array();
-    for i in 0..3 {
-        let err = (f64::from(g[i]) - want.0[i]).abs();
+    for (i, (g, w)) in got.color.to_array().into_iter().zip(want.0).enumerate() {
+        let err = (f64::from(g) - w).abs();
         assert!(
             err <= bound,
             "channel {i}: {got:?} vs exact {want:?}, error {err} > {bound}, from {context:?}"

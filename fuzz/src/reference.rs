@@ -61,7 +61,7 @@ pub fn defects(f: &RawFragment) -> (Defects, Expected) {
     d.add(FragmentError::NanAlpha, a_in.is_nan());
     d.add(
         FragmentError::AlphaOutOfRange,
-        !a_in.is_nan() && !(a_in >= 0.0 && a_in <= 1.0),
+        !a_in.is_nan() && !(0.0..=1.0).contains(&a_in),
     );
     let alpha = if f.ctor == Ctor::WithTransmittance {
         1.0 - a_in
