@@ -19,9 +19,12 @@
 //! C      = C_head + T_head * (c_tail * (1 - T_tail) + C_background * T_tail)
 //! ```
 //!
-//! `c_tail * (1 - T_tail) = S_c * g` with `g = (1 - T_tail) / S_a`, which tends to 1 as
-//! `S_a -> 0`; the kernel uses `g = 1` when `S_a = 0`, so a tail of pure additive light
-//! adds its light instead of vanishing (the formula as printed divides by zero there).
+//! `c_tail * (1 - T_tail) = S_c * g` with `g = (1 - T_tail) / S_a`. With `x = 1 - S_a / n`,
+//! `g = (1 - x^n) / (n (1 - x)) = (1 + x + ... + x^(n-1)) / n`: the kernel computes this
+//! geometric sum alongside `x^n`, which needs no subtraction of nearly equal numbers (the
+//! printed form loses most of its digits in f32 when the mean alpha is tiny) and gives
+//! `g = 1` for a tail of pure additive light, which then adds its light instead of vanishing
+//! (the printed form divides by zero there).
 //!
 //! Order independence: the head ends up holding the `K` nearest fragments whatever the
 //! order (for distinct depths), and the tail holds exact integer sums that saturate;
@@ -188,20 +191,28 @@ pub(crate) fn tail_lanes<F: FloatLanes>(sums: [F::U; 3], alpha: F::U, count: F::
     let mean = s_a.div(n);
     let mean = F::select(mean.gt(one), one, mean);
     let x = one - mean;
-    // x^count by binary exponentiation over the bits of the count (at most 16); bits above
-    // the largest count of all lanes are zero and would leave `power` unchanged.
-    let mut power = one;
-    let mut base = x;
+    // T_tail = x^n and the geometric sum S_n = 1 + x + ... + x^(n-1), both by binary
+    // exponentiation over the bits of the count (at most 16; bits above the largest count of
+    // all lanes are zero and would change nothing). The color factor
+    // g = (1 - T_tail) / S_a = (1 - x^n) / (n (1 - x)) = S_n / n
+    // is computed from S_n: only products and sums of non-negative terms, where the printed
+    // formula subtracts two numbers close to 1 (for a tiny mean alpha it lost a third of the
+    // tail's light in f32). g = 1 exactly for pure additive light (x = 1).
+    let mut power = one; // x^k for the bits seen so far
+    let mut sum = F::splat(0.0); // S_k
+    let mut base = x; // x^(2^i)
+    let mut base_sum = one; // S_(2^i)
     for bit in 0..F::bit_length(count).min(16) {
-        power = F::select(F::bit(count, bit), power * base, power);
+        let on = F::bit(count, bit);
+        sum = F::select(on, sum + power * base_sum, sum); // S_(k + 2^i) = S_k + x^k S_(2^i)
+        power = F::select(on, power * base, power);
+        base_sum = base_sum * (one + base); // S_(2^(i+1)) = S_(2^i) (1 + x^(2^i))
         base = base * base;
     }
     let t_tail = F::select(empty, x, power);
-    // g = (1 - T_tail) / S_a = (1 - (1 - m)^n) / (n m), which lies in (0, 1] and tends to 1
-    // as S_a -> 0 (pure additive light). In f32, `1 - mean` cancels when the mean is a few
-    // ulps, which can push the quotient above 1: clamp it, so the tail never amplifies light.
-    let g = F::select(F::is_zero(alpha), one, (one - t_tail).div(s_a));
-    let g = F::select(g.gt(one), one, g);
+    // A zero count (arbitrary bytes only) resolves as a count of 1: S_1 / 1 = 1.
+    let g = F::select(empty, one, sum.div(n));
+    let g = F::select(g.gt(one), one, g); // rounding only: S_n <= n
     let [r, gr, b] = sums;
     (
         [F::from_u(r) * inv * g, F::from_u(gr) * inv * g, F::from_u(b) * inv * g],

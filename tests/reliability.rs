@@ -604,17 +604,27 @@ fn finding_f1_tail_never_amplifies_light() {
     assert!((f64::from(px.x) - exact).abs() < 0.01, "pixel {px:?}, exact {exact}");
 }
 
-/// F1b (open): the clamp of F1 removed the amplification, not the cancellation. When
-/// `1 - mean` rounds *up* (mean alpha just under 1.5 f32 ulps of 1), `(1 - T_tail) / S_a`
-/// is too small and the tail's light is dimmed by up to a third: tail `color [1023; 3],
-/// alpha 1, count 45372` resolves to about 2.8 instead of 4.0. Suggested fix: compute
+/// F1b (fixed): the clamp of F1 removed the amplification, not the cancellation. When
+/// `1 - mean` rounded *up* (mean alpha just under 1.5 f32 ulps of 1), `(1 - T_tail) / S_a`
+/// was too small and the tail's light was dimmed by up to a third: tail `color [1023; 3],
+/// alpha 1, count 45372` resolved to 2.76 instead of 4.00. The kernel now computes
 /// `g = (1 - x^n) / (n (1 - x))` as `S_n / n`, with the geometric sum
-/// `S_n = 1 + x + ... + x^(n-1)` built by the same binary exponentiation as `x^n`
-/// (`S_(a+b) = S_a + x^a S_b`): multiplies and adds only, no cancellation.
+/// `S_n = 1 + x + ... + x^(n-1)` built by the same binary exponentiation as `x^n`.
 #[test]
-#[ignore = "kernel bug F1b: Tail::resolve dims tail light by up to 1/3 when the mean alpha is about 1.5 f32 ulps (cancellation in 1 - mean)"]
-fn open_finding_f1b_tail_light_dimmed() {
-    let (alpha, count) = (1u32, 45372u32);
+fn finding_f1b_tail_light_not_dimmed() {
+    for (alpha, count) in [
+        (1u32, 45372u32),
+        (1, 48),
+        (1, 65535),
+        (3, 30000),
+        (255, 1000),
+        (60000, 65535),
+    ] {
+        check_tail_light(alpha, count);
+    }
+}
+
+fn check_tail_light(alpha: u32, count: u32) {
     let r = Tail::from_sums([1023; 3], alpha, count).resolve();
     let n = f64::from(count);
     let s_a = f64::from(alpha) / 255.0;
