@@ -12,8 +12,9 @@
 //! composite: for each band b of the framebuffer (bands_mut, in parallel):
 //!                clear band b
 //!                for chunk in 0..chunks, for entry in lists[chunk][b]:   // submission order
-//!                    insert entry (MLAB: consecutive entries of one 8-pixel span on
-//!                    distinct lanes go in as one span insert of the lanes kernel)
+//!                    insert entry (MLAB: each 8-pixel span gathers its fragments in a
+//!                    pending span insert, flushed when a lane repeats, when full and at
+//!                    the end, so fragments of different primitives share span inserts)
 //!                resolve band b into its lines of the output
 //! ```
 //!
@@ -580,26 +581,48 @@ fn finite_or_zero(x: f32) -> f32 {
     if x.is_finite() { x } else { 0.0 }
 }
 
-/// Insert one band's fragments in order: consecutive fragments of one 8-pixel span (aligned)
-/// on distinct lanes become one span insert; any other fragment starts a new span insert.
+/// Insert one band's fragments: every 8-pixel span of the band collects its fragments in a
+/// pending span insert (one row per lane), flushed into the framebuffer when a fragment
+/// arrives for a lane that is already pending (so each pixel still sees its fragments in
+/// submission order), when all 8 lanes are pending, and at the end of the band. Different
+/// pixels are independent in MLAB, so fragments of different primitives share span inserts
+/// and the result is byte-identical to inserting the stream fragment by fragment.
 fn mlab_band<'e, const M: usize>(
     band: &mut SpanFramebuffer<'_, M>,
     entries: impl Iterator<Item = &'e Entry<Row>>,
 ) -> Result<(), mlab::FramebufferError> {
-    let (mut key, mut rows, mut mask) = (u32::MAX, [Row::EMPTY; LANES], 0u8);
+    let spans_per_line = band.width().div_ceil(LANES as u32) as usize;
+    let mut pending = vec![([Row::EMPTY; LANES], 0u8); spans_per_line * band.height() as usize];
+    let flush = |band: &mut SpanFramebuffer<'_, M>, s: usize, rows: &[Row; LANES], mask: u8| {
+        let (y, sx) = (s / spans_per_line, s % spans_per_line);
+        band.insert_span((sx * LANES) as u32, y as u32, rows, mask)
+    };
     for e in entries {
-        let (k, lane) = (e.pos >> 3, e.pos & 7);
-        if k != key || mask & (1 << lane) != 0 {
-            if mask != 0 {
-                band.insert_span((key << 3) & 0xffff, key >> 13, &rows, mask)?;
-            }
-            (key, mask) = (k, 0);
+        let (x, y) = ((e.pos & 0xffff) as usize, (e.pos >> 16) as usize);
+        let (s, lane) = (y * spans_per_line + x / LANES, x % LANES);
+        let Some((rows, mask)) = pending.get_mut(s) else {
+            return Err(mlab::FramebufferError::OutOfBounds {
+                x: x as u32,
+                y: y as u32,
+                width: band.width(),
+                height: band.height(),
+            });
+        };
+        if *mask & (1 << lane) != 0 {
+            flush(band, s, rows, *mask)?;
+            *mask = 0;
         }
-        rows[lane as usize] = e.data;
-        mask |= 1 << lane;
+        rows[lane] = e.data;
+        *mask |= 1 << lane;
+        if *mask == 0xff {
+            flush(band, s, rows, 0xff)?;
+            *mask = 0;
+        }
     }
-    if mask != 0 {
-        band.insert_span((key << 3) & 0xffff, key >> 13, &rows, mask)?;
+    for (s, (rows, mask)) in pending.iter().enumerate() {
+        if *mask != 0 {
+            flush(band, s, rows, *mask)?;
+        }
     }
     Ok(())
 }
