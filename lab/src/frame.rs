@@ -552,7 +552,7 @@ pub fn mlab_unbinned<const M: usize>(
     if !by_width.exact_below(stream.pixels() as u64) {
         return Err(format!("frame {w}x{h} too large"));
     }
-    let mut entries = Vec::with_capacity(LANES);
+    let mut pending = Pending::new(&fb);
     for (g, group) in stream.frags.chunks(LANES).enumerate() {
         let (rows, invalid) = quantize_rows(group);
         if invalid != 0 {
@@ -561,17 +561,16 @@ pub fn mlab_unbinned<const M: usize>(
                 g * LANES + invalid.trailing_zeros() as usize
             ));
         }
-        entries.clear();
         for (f, r) in group.iter().zip(rows) {
             let y = by_width.div(f.pixel);
-            entries.push(Entry {
+            let e = Entry {
                 pos: (f.pixel - y * w) | y << 16,
                 data: r,
-            });
+            };
+            pending.push(&mut fb, &e).map_err(|e| e.to_string())?;
         }
-        // Groups of 8 stream fragments; a span insert never straddles two groups here.
-        mlab_band(&mut fb, entries.iter()).map_err(|e| e.to_string())?;
     }
+    pending.flush_all(&mut fb).map_err(|e| e.to_string())?;
     fb.resolve_rgba8(out, Background::Opaque(Vec3::from(stream.background)))
         .map_err(|e| e.to_string())
 }
@@ -581,48 +580,84 @@ fn finite_or_zero(x: f32) -> f32 {
     if x.is_finite() { x } else { 0.0 }
 }
 
-/// Insert one band's fragments: every 8-pixel span of the band collects its fragments in a
-/// pending span insert (one row per lane), flushed into the framebuffer when a fragment
-/// arrives for a lane that is already pending (so each pixel still sees its fragments in
-/// submission order), when all 8 lanes are pending, and at the end of the band. Different
-/// pixels are independent in MLAB, so fragments of different primitives share span inserts
-/// and the result is byte-identical to inserting the stream fragment by fragment.
-fn mlab_band<'e, const M: usize>(
-    band: &mut SpanFramebuffer<'_, M>,
-    entries: impl Iterator<Item = &'e Entry<Row>>,
-) -> Result<(), mlab::FramebufferError> {
-    let spans_per_line = band.width().div_ceil(LANES as u32) as usize;
-    let mut pending = vec![([Row::EMPTY; LANES], 0u8); spans_per_line * band.height() as usize];
-    let flush = |band: &mut SpanFramebuffer<'_, M>, s: usize, rows: &[Row; LANES], mask: u8| {
+/// Pending span inserts, one per 8-pixel span of a framebuffer: each span collects fragments
+/// (one row per lane) and goes into the framebuffer as one span insert when a fragment arrives
+/// for a lane that is already pending (so each pixel still sees its fragments in submission
+/// order), when all 8 lanes are pending, and at [`Pending::flush_all`]. Different pixels are
+/// independent in MLAB, so fragments of different primitives share span inserts and the
+/// result is byte-identical to inserting the stream fragment by fragment.
+struct Pending {
+    spans_per_line: usize,
+    slots: Vec<([Row; LANES], u8)>,
+}
+
+impl Pending {
+    fn new<const M: usize>(fb: &SpanFramebuffer<'_, M>) -> Pending {
+        let spans_per_line = fb.width().div_ceil(LANES as u32) as usize;
+        Pending {
+            spans_per_line,
+            slots: vec![([Row::EMPTY; LANES], 0u8); spans_per_line * fb.height() as usize],
+        }
+    }
+
+    fn flush<const M: usize>(
+        spans_per_line: usize,
+        fb: &mut SpanFramebuffer<'_, M>,
+        s: usize,
+        rows: &[Row; LANES],
+        mask: u8,
+    ) -> Result<(), mlab::FramebufferError> {
         let (y, sx) = (s / spans_per_line, s % spans_per_line);
-        band.insert_span((sx * LANES) as u32, y as u32, rows, mask)
-    };
-    for e in entries {
+        fb.insert_span((sx * LANES) as u32, y as u32, rows, mask)
+    }
+
+    fn push<const M: usize>(
+        &mut self,
+        fb: &mut SpanFramebuffer<'_, M>,
+        e: &Entry<Row>,
+    ) -> Result<(), mlab::FramebufferError> {
         let (x, y) = ((e.pos & 0xffff) as usize, (e.pos >> 16) as usize);
-        let (s, lane) = (y * spans_per_line + x / LANES, x % LANES);
-        let Some((rows, mask)) = pending.get_mut(s) else {
+        let (s, lane) = (y * self.spans_per_line + x / LANES, x % LANES);
+        let Some((rows, mask)) = self.slots.get_mut(s) else {
             return Err(mlab::FramebufferError::OutOfBounds {
                 x: x as u32,
                 y: y as u32,
-                width: band.width(),
-                height: band.height(),
+                width: fb.width(),
+                height: fb.height(),
             });
         };
         if *mask & (1 << lane) != 0 {
-            flush(band, s, rows, *mask)?;
+            Self::flush(self.spans_per_line, fb, s, rows, *mask)?;
             *mask = 0;
         }
         rows[lane] = e.data;
         *mask |= 1 << lane;
         if *mask == 0xff {
-            flush(band, s, rows, 0xff)?;
+            Self::flush(self.spans_per_line, fb, s, rows, 0xff)?;
             *mask = 0;
         }
+        Ok(())
     }
-    for (s, (rows, mask)) in pending.iter().enumerate() {
-        if *mask != 0 {
-            flush(band, s, rows, *mask)?;
+
+    fn flush_all<const M: usize>(&mut self, fb: &mut SpanFramebuffer<'_, M>) -> Result<(), mlab::FramebufferError> {
+        for (s, (rows, mask)) in self.slots.iter_mut().enumerate() {
+            if *mask != 0 {
+                Self::flush(self.spans_per_line, fb, s, rows, *mask)?;
+                *mask = 0;
+            }
         }
+        Ok(())
     }
-    Ok(())
+}
+
+/// Insert one band's fragments through [`Pending`] span inserts.
+fn mlab_band<'e, const M: usize>(
+    band: &mut SpanFramebuffer<'_, M>,
+    entries: impl Iterator<Item = &'e Entry<Row>>,
+) -> Result<(), mlab::FramebufferError> {
+    let mut pending = Pending::new(band);
+    for e in entries {
+        pending.push(band, e)?;
+    }
+    pending.flush_all(band)
 }
