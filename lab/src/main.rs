@@ -443,9 +443,9 @@ fn cmd_bench(mut a: Args) -> Result<(), Fail> {
     // Frame-level table.
     println!("## Frame timings (median of {reps}, spread = (max - min) / median)\n");
     println!(
-        "| scene | method | threads | ms (median) | min - max ms | spread | ns / fragment | frames / s | memory / frame | time / MLAB 4 |"
+        "| scene | method | threads | ms (median) | min - max ms | spread | CPU / wall | ns / fragment | frames / s | memory / frame | time / MLAB 4 |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for m in &all {
         let fragments = m.fragments;
         let px = size.0 as usize * size.1 as usize;
