@@ -189,7 +189,9 @@ pub(crate) fn tail_lanes<F: FloatLanes>(sums: [F::U; 3], alpha: F::U, count: F::
     let s_a = F::from_u(alpha) * inv;
     let n = F::select(empty, one, F::from_u(count));
     let mean = s_a.div(n);
-    let mean = F::select(mean.gt(one), one, mean);
+    // A mean alpha above 1 (arbitrary bytes only) is clamped to 1: the tail is opaque.
+    let clamped = mean.gt(one);
+    let mean = F::select(clamped, one, mean);
     let x = one - mean;
     // T_tail = x^n and the geometric sum S_n = 1 + x + ... + x^(n-1), both by binary
     // exponentiation over the bits of the count (at most 16; bits above the largest count of
@@ -210,8 +212,10 @@ pub(crate) fn tail_lanes<F: FloatLanes>(sums: [F::U; 3], alpha: F::U, count: F::
         base = base * base;
     }
     let t_tail = F::select(empty, x, power);
-    // A zero count (arbitrary bytes only) resolves as a count of 1: S_1 / 1 = 1.
+    // A zero count (arbitrary bytes only) resolves as a count of 1: S_1 / 1 = 1. With the
+    // mean clamped, S_a is no longer n (1 - x): x = 0, T_tail = 0 and g = (1 - 0) / S_a.
     let g = F::select(empty, one, sum.div(n));
+    let g = F::select(clamped, one.div(s_a), g);
     let g = F::select(g.gt(one), one, g); // rounding only: S_n <= n
     let [r, gr, b] = sums;
     (
@@ -427,6 +431,45 @@ mod tests {
             (t.color_sum(), t.alpha_sum(), t.count(), t.spare()),
             ([9, 0, 0], 0, 1, 3)
         );
+    }
+
+    /// Bavoil-Myers in f64 as printed, with the documented handling of arbitrary bytes
+    /// (count 0 as count 1, mean alpha clamped to 1).
+    fn bavoil_myers(t: Tail) -> (f64, f64) {
+        let n = t.count().max(1) as f64;
+        let s_a = t.alpha_sum() as f64 / 255.0;
+        let x = 1.0 - (s_a / n).min(1.0);
+        let t_tail = x.powf(n);
+        let g = if s_a == 0.0 { 1.0 } else { (1.0 - t_tail) / s_a };
+        (t.color_sum()[0] as f64 / 255.0 * g, t_tail)
+    }
+
+    #[test]
+    fn tail_resolve_matches_bavoil_myers_including_arbitrary_bytes() {
+        let cases = [
+            (767, 65280, 0), // count 0, mean above 1 (the fuzz finding of the S_n / n rewrite)
+            (500, 600, 2),   // mean above 1
+            (300, 200, 0),   // count 0, mean below 1
+            (1023, 1, 45372),
+            (255, 255, 1),
+            (1000, 5000, 60),
+            (12, 0, 7), // pure additive light
+        ];
+        for (c, a, n) in cases {
+            let t = Tail::from_sums([c, 0, 0], a, n);
+            let r = t.resolve();
+            let (want_c, want_t) = bavoil_myers(t);
+            // The documented precision: `1 - mean` is a multiple of 2^-24, so |dT| <= n 2^-24,
+            // and the color is within n 2^-23 relative (docs/reliability.md).
+            let n = t.count().max(1) as f64;
+            let dt = n * 2f64.powi(-24) + 1e-5;
+            assert!(
+                (r.transmittance as f64 - want_t).abs() <= dt,
+                "{t:?}: {r:?} vs T {want_t}"
+            );
+            let dc = 1e-5 + (n * 2f64.powi(-23) + 1e-5) * want_c;
+            assert!((r.color.x as f64 - want_c).abs() <= dc, "{t:?}: {r:?} vs C {want_c}");
+        }
     }
 
     #[test]
