@@ -83,11 +83,11 @@ impl core::fmt::Display for FramebufferError {
 
 impl core::error::Error for FramebufferError {}
 
-/// Width and height with the checks shared by both views.
+/// Width and height with the checks shared by every framebuffer view.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Dims {
-    width: u32,
-    height: u32,
+pub(crate) struct Dims {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
 }
 
 impl Dims {
@@ -95,12 +95,16 @@ impl Dims {
         (self.width as usize).checked_mul(self.height as usize)
     }
 
+    /// `width * height * rows_per_pixel`, or [`FramebufferError::SizeOverflow`].
+    fn rows_needed(self, rows_per_pixel: usize) -> Result<usize, FramebufferError> {
+        self.pixels()
+            .and_then(|p| p.checked_mul(rows_per_pixel))
+            .ok_or(FramebufferError::SizeOverflow)
+    }
+
     /// Check that `storage_len` is exactly the rows needed.
     fn check_storage(self, rows_per_pixel: usize, storage_len: usize) -> Result<(), FramebufferError> {
-        let expected = self
-            .pixels()
-            .and_then(|p| p.checked_mul(rows_per_pixel))
-            .ok_or(FramebufferError::SizeOverflow)?;
+        let expected = self.rows_needed(rows_per_pixel)?;
         if expected != storage_len {
             return Err(FramebufferError::StorageLength {
                 expected,
@@ -110,21 +114,26 @@ impl Dims {
         Ok(())
     }
 
+    /// The error for pixel `(x, y)` outside these dimensions.
+    pub(crate) fn out_of_bounds(self, x: u32, y: u32) -> FramebufferError {
+        FramebufferError::OutOfBounds {
+            x,
+            y,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
     /// Pixel index of `(x, y)`.
     fn index(self, x: u32, y: u32) -> Result<usize, FramebufferError> {
         if x >= self.width || y >= self.height {
-            return Err(FramebufferError::OutOfBounds {
-                x,
-                y,
-                width: self.width,
-                height: self.height,
-            });
+            return Err(self.out_of_bounds(x, y));
         }
         Ok(y as usize * self.width as usize + x as usize)
     }
 
-    /// Check an output slice length (storage was checked, so `pixels` cannot overflow).
-    fn check_output(self, len: usize) -> Result<(), FramebufferError> {
+    /// Check an output slice length: exactly `width * height` pixels.
+    pub(crate) fn check_output(self, len: usize) -> Result<(), FramebufferError> {
         let expected = self.pixels().ok_or(FramebufferError::SizeOverflow)?;
         if len != expected {
             return Err(FramebufferError::OutputLength { expected, actual: len });
@@ -205,10 +214,7 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
     /// Rows of storage needed for `width x height` pixels (`width * height * M`), or
     /// [`FramebufferError::SizeOverflow`].
     pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
-        (width as usize)
-            .checked_mul(height as usize)
-            .and_then(|p| p.checked_mul(M))
-            .ok_or(FramebufferError::SizeOverflow)
+        Dims { width, height }.rows_needed(M)
     }
 
     /// A view over `storage`, which must hold exactly `width * height * M` rows. The
@@ -267,24 +273,14 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
     /// The blending array of pixel `(x, y)`.
     pub fn pixel(&self, x: u32, y: u32) -> Result<&[Row; M], FramebufferError> {
         let i = self.dims.index(x, y)?;
-        self.pixels.get(i).ok_or(FramebufferError::OutOfBounds {
-            x,
-            y,
-            width: self.dims.width,
-            height: self.dims.height,
-        })
+        self.pixels.get(i).ok_or(self.dims.out_of_bounds(x, y))
     }
 
     /// The blending array of pixel `(x, y)`, mutable.
     pub fn pixel_mut(&mut self, x: u32, y: u32) -> Result<&mut [Row; M], FramebufferError> {
         let i = self.dims.index(x, y)?;
         let d = self.dims;
-        self.pixels.get_mut(i).ok_or(FramebufferError::OutOfBounds {
-            x,
-            y,
-            width: d.width,
-            height: d.height,
-        })
+        self.pixels.get_mut(i).ok_or(d.out_of_bounds(x, y))
     }
 
     /// Resolve one pixel (Eq. 5).
@@ -306,10 +302,7 @@ pub struct HybridFramebuffer<'a, const K: usize> {
 impl<'a, const K: usize> HybridFramebuffer<'a, K> {
     /// Rows of storage needed for `width x height` pixels (`width * height * (K + 1)`).
     pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
-        (width as usize)
-            .checked_mul(height as usize)
-            .and_then(|p| p.checked_mul(K + 1))
-            .ok_or(FramebufferError::SizeOverflow)
+        Dims { width, height }.rows_needed(K + 1)
     }
 
     /// A view over `storage`, which must hold exactly `width * height * (K + 1)` rows.
@@ -363,15 +356,9 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
 
     fn pixel_slots(&self, x: u32, y: u32) -> Result<&[Row], FramebufferError> {
         let i = self.dims.index(x, y)?;
-        let d = self.dims;
         self.rows
             .get(i * (K + 1)..(i + 1) * (K + 1))
-            .ok_or(FramebufferError::OutOfBounds {
-                x,
-                y,
-                width: d.width,
-                height: d.height,
-            })
+            .ok_or(self.dims.out_of_bounds(x, y))
     }
 
     /// Insert a fragment at `(x, y)` with Listing 2.

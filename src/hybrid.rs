@@ -243,21 +243,6 @@ pub(crate) fn resolve_lanes<F: FloatLanes>(
     combine_lanes(head, tail_lanes::<F>(sums, alpha, count))
 }
 
-/// `x^n` by binary exponentiation over the 16 bits of `n` (`n <= 65535`), the same
-/// sequence of f32 multiplies as the tail resolve (`core` has no `powi`).
-#[inline]
-pub fn powi(x: f32, n: u32) -> f32 {
-    let mut result = 1.0f32;
-    let mut base = x;
-    for bit in 0..16 {
-        if (n >> bit) & 1 != 0 {
-            result *= base;
-        }
-        base *= base;
-    }
-    result
-}
-
 impl core::fmt::Debug for Tail {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(
@@ -391,20 +376,6 @@ impl<const K: usize> Default for Hybrid<K> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn powi_matches_repeated_multiplication_for_small_n() {
-        for n in 0..40u32 {
-            let mut expect = 1.0f64;
-            for _ in 0..n {
-                expect *= 0.9;
-            }
-            assert!((powi(0.9, n) as f64 - expect).abs() < 1e-5, "n = {n}");
-        }
-        assert_eq!(powi(0.0, 0), 1.0);
-        assert_eq!(powi(1.0, 65535), 1.0);
-        assert_eq!(powi(0.5, 65535), 0.0);
-    }
 
     #[test]
     fn tail_saturates_instead_of_wrapping() {

@@ -42,7 +42,7 @@
 use glam::Vec4;
 use half::f16;
 
-use crate::framebuffer::FramebufferError;
+use crate::framebuffer::{Dims, FramebufferError};
 use crate::hybrid::Tail;
 use crate::lanes::{self, FragmentLanes, LANES, MlabSpan};
 use crate::resolve::{Background, Resolved, to_rgba8, to_rgba16f};
@@ -75,13 +75,16 @@ impl SpanDims {
             .ok_or(FramebufferError::SizeOverflow)
     }
 
-    fn out_of_bounds(self, x: u32, y: u32) -> FramebufferError {
-        FramebufferError::OutOfBounds {
-            x,
-            y,
+    /// The pixel dimensions, for the checks shared with the pixel-major views.
+    fn plain(self) -> Dims {
+        Dims {
             width: self.width,
             height: self.height,
         }
+    }
+
+    fn out_of_bounds(self, x: u32, y: u32) -> FramebufferError {
+        self.plain().out_of_bounds(x, y)
     }
 
     /// Span index and lane of pixel `(x, y)`.
@@ -113,13 +116,7 @@ impl SpanDims {
     }
 
     fn check_output(self, len: usize) -> Result<(), FramebufferError> {
-        let expected = (self.width as usize)
-            .checked_mul(self.height as usize)
-            .ok_or(FramebufferError::SizeOverflow)?;
-        if len != expected {
-            return Err(FramebufferError::OutputLength { expected, actual: len });
-        }
-        Ok(())
+        self.plain().check_output(len)
     }
 
     /// Write the 8 lanes of each span (`resolve(span index)`) into a row-major output of
