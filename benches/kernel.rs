@@ -16,7 +16,9 @@
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
-use mlab::{Background, Row, Tail, hybrid, mlab as listing1, resolve_rows, to_rgba8};
+use mlab::{
+    Arithmetic, Background, Paper, Row, TailFormat, Unbiased, hybrid, mlab as listing1, resolve_rows, to_rgba8,
+};
 use std::hint::black_box;
 use wide::{u8x32, u16x16, u32x8};
 
@@ -102,20 +104,20 @@ fn fragments(stream: &[Step]) -> u64 {
 }
 
 #[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
-fn mlab_scalar<const M: usize>(pixels: &mut [[Row; M]], stream: &[Step]) {
+fn mlab_scalar<A: Arithmetic, const M: usize>(pixels: &mut [[Row; M]], stream: &[Step]) {
     for s in stream {
         for (lane, row) in s.rows.iter().enumerate() {
             if s.mask & (1 << lane) != 0 {
-                listing1::insert(&mut pixels[s.span * LANES + lane], *row);
+                listing1::insert_with::<A, M>(&mut pixels[s.span * LANES + lane], *row);
             }
         }
     }
 }
 
 #[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
-fn mlab_lanes<const M: usize>(spans: &mut [MlabSpan<M>], stream: &[Step]) {
+fn mlab_lanes<A: Arithmetic, const M: usize>(spans: &mut [MlabSpan<M>], stream: &[Step]) {
     for s in stream {
-        lanes::mlab_insert(&mut spans[s.span], &s.rows, s.mask);
+        lanes::mlab_insert_with::<A, M>(&mut spans[s.span], &s.rows, s.mask);
     }
 }
 
@@ -134,7 +136,7 @@ fn mlab_lanes_pixel_major<const M: usize>(pixels: &mut [[Row; M]], stream: &[Ste
 }
 
 #[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
-fn hybrid_scalar<const K: usize>(pixels: &mut [([Row; K], Tail)], stream: &[Step]) {
+fn hybrid_scalar<T: TailFormat, const K: usize>(pixels: &mut [([Row; K], T)], stream: &[Step]) {
     for s in stream {
         for (lane, row) in s.rows.iter().enumerate() {
             if s.mask & (1 << lane) != 0 {
@@ -146,7 +148,7 @@ fn hybrid_scalar<const K: usize>(pixels: &mut [([Row; K], Tail)], stream: &[Step
 }
 
 #[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
-fn hybrid_lanes<const K: usize>(spans: &mut [HybridSpan<K>], stream: &[Step]) {
+fn hybrid_lanes<A: Arithmetic, const K: usize>(spans: &mut [HybridSpan<K, A>], stream: &[Step]) {
     for s in stream {
         lanes::hybrid_insert(&mut spans[s.span], &s.rows, s.mask);
     }
@@ -209,13 +211,23 @@ fn over_lanes(buf: &mut [u32], stream: &[Step], src: &[[u32; LANES]]) {
     }
 }
 
+/// Bench names: `mlab_scalar/M` and `mlab_lanes/M` in the default arithmetic (Unbiased),
+/// `mlab_scalar_paper/M` and `mlab_lanes_paper/M` in the paper's; likewise `ht_*`.
 macro_rules! mlab_group {
     ($g:expr, $stream:expr, $($m:literal),*) => {$(
-        {
+        for (suffix, paper) in [("", false), ("_paper", true)] {
             let mut pixels = vec![[Row::EMPTY; $m]; W * H];
-            $g.bench_function(BenchmarkId::new("mlab_scalar", $m), |b| b.iter(|| mlab_scalar::<$m>(&mut pixels, black_box($stream))));
             let mut spans = vec![[[Row::EMPTY; LANES]; $m]; SPANS];
-            $g.bench_function(BenchmarkId::new("mlab_lanes", $m), |b| b.iter(|| mlab_lanes::<$m>(&mut spans, black_box($stream))));
+            $g.bench_function(BenchmarkId::new(format!("mlab_scalar{suffix}"), $m), |b| b.iter(|| if paper {
+                mlab_scalar::<Paper, $m>(&mut pixels, black_box($stream))
+            } else {
+                mlab_scalar::<Unbiased, $m>(&mut pixels, black_box($stream))
+            }));
+            $g.bench_function(BenchmarkId::new(format!("mlab_lanes{suffix}"), $m), |b| b.iter(|| if paper {
+                mlab_lanes::<Paper, $m>(&mut spans, black_box($stream))
+            } else {
+                mlab_lanes::<Unbiased, $m>(&mut spans, black_box($stream))
+            }));
         }
     )*};
 }
@@ -223,10 +235,14 @@ macro_rules! mlab_group {
 macro_rules! hybrid_group {
     ($g:expr, $stream:expr, $($k:literal),*) => {$(
         {
-            let mut pixels = vec![([Row::EMPTY; $k], Tail::EMPTY); W * H];
-            $g.bench_function(BenchmarkId::new("ht_scalar", $k), |b| b.iter(|| hybrid_scalar::<$k>(&mut pixels, black_box($stream))));
+            let mut pixels = vec![([Row::EMPTY; $k], mlab::Tail::EMPTY); W * H];
+            $g.bench_function(BenchmarkId::new("ht_scalar", $k), |b| b.iter(|| hybrid_scalar(&mut pixels, black_box($stream))));
             let mut spans = vec![HybridSpan::<$k>::new(); SPANS];
-            $g.bench_function(BenchmarkId::new("ht_lanes", $k), |b| b.iter(|| hybrid_lanes::<$k>(&mut spans, black_box($stream))));
+            $g.bench_function(BenchmarkId::new("ht_lanes", $k), |b| b.iter(|| hybrid_lanes(&mut spans, black_box($stream))));
+            let mut pixels = vec![([Row::EMPTY; $k], hybrid::PaperTail::EMPTY); W * H];
+            $g.bench_function(BenchmarkId::new("ht_scalar_paper", $k), |b| b.iter(|| hybrid_scalar(&mut pixels, black_box($stream))));
+            let mut spans = vec![HybridSpan::<$k, Paper>::new(); SPANS];
+            $g.bench_function(BenchmarkId::new("ht_lanes_paper", $k), |b| b.iter(|| hybrid_lanes(&mut spans, black_box($stream))));
         }
     )*};
 }
@@ -272,11 +288,11 @@ fn insert_small(c: &mut Criterion) {
     });
     let mut pixels = vec![[Row::EMPTY; 4]; SMALL_SPANS * LANES];
     g.bench_function(BenchmarkId::new("mlab_scalar", 4), |b| {
-        b.iter(|| mlab_scalar::<4>(&mut pixels, black_box(&stream)))
+        b.iter(|| mlab_scalar::<Unbiased, 4>(&mut pixels, black_box(&stream)))
     });
     let mut spans = vec![[[Row::EMPTY; LANES]; 4]; SMALL_SPANS];
     g.bench_function(BenchmarkId::new("mlab_lanes", 4), |b| {
-        b.iter(|| mlab_lanes::<4>(&mut spans, black_box(&stream)))
+        b.iter(|| mlab_lanes::<Unbiased, 4>(&mut spans, black_box(&stream)))
     });
     g.finish();
 }
@@ -298,7 +314,7 @@ fn resolve_lanes(out: &mut [[u8; 4]], spans: &[MlabSpan<4>], bg: Background) {
 fn resolve(c: &mut Criterion) {
     let stream = random_stream(SPANS);
     let mut pixels = vec![[Row::EMPTY; 4]; W * H];
-    mlab_scalar::<4>(&mut pixels, &stream);
+    mlab_scalar::<Unbiased, 4>(&mut pixels, &stream);
     let spans: Vec<MlabSpan<4>> = pixels
         .chunks_exact(LANES)
         .map(|c| lanes::from_pixel_major(c.try_into().expect("8 pixels")))
@@ -313,10 +329,10 @@ fn resolve(c: &mut Criterion) {
     g.bench_function(BenchmarkId::new("mlab_lanes", 4), |b| {
         b.iter(|| resolve_lanes(&mut out, black_box(&spans), bg))
     });
-    let mut hp = vec![([Row::EMPTY; 3], Tail::EMPTY); W * H];
-    hybrid_scalar::<3>(&mut hp, &stream);
+    let mut hp = vec![([Row::EMPTY; 3], mlab::Tail::EMPTY); W * H];
+    hybrid_scalar(&mut hp, &stream);
     let mut hs = vec![HybridSpan::<3>::new(); SPANS];
-    hybrid_lanes::<3>(&mut hs, &stream);
+    hybrid_lanes(&mut hs, &stream);
     g.bench_function(BenchmarkId::new("ht_scalar", 3), |b| {
         b.iter(|| {
             for (o, (h, t)) in out.iter_mut().zip(black_box(&hp)) {

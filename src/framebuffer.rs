@@ -25,8 +25,11 @@
 use glam::Vec4;
 use half::f16;
 
+use core::marker::PhantomData;
+
+use crate::arith::{Arithmetic, Unbiased};
 use crate::fragment::Fragment;
-use crate::hybrid::{self, Tail};
+use crate::hybrid::{self, TailFormat};
 use crate::mlab;
 use crate::resolve::{Background, Resolved, resolve_rows, to_rgba8, to_rgba16f};
 use crate::row::Row;
@@ -203,14 +206,16 @@ macro_rules! storage_views {
     };
 }
 
-/// An MLAB framebuffer: `width * height` blending arrays of `M` rows over borrowed storage.
+/// An MLAB framebuffer: `width * height` blending arrays of `M` rows over borrowed storage,
+/// in the arithmetic `A` ([`Unbiased`] by default, [`Paper`](crate::Paper) for the paper's).
 #[derive(Debug)]
-pub struct MlabFramebuffer<'a, const M: usize> {
+pub struct MlabFramebuffer<'a, const M: usize, A: Arithmetic = Unbiased> {
     pixels: &'a mut [[Row; M]],
     dims: Dims,
+    arithmetic: PhantomData<A>,
 }
 
-impl<'a, const M: usize> MlabFramebuffer<'a, M> {
+impl<'a, const M: usize, A: Arithmetic> MlabFramebuffer<'a, M, A> {
     /// Rows of storage needed for `width x height` pixels (`width * height * M`), or
     /// [`FramebufferError::SizeOverflow`].
     pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
@@ -231,7 +236,11 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
                 expected: actual,
                 actual,
             })?;
-        Ok(MlabFramebuffer { pixels, dims })
+        Ok(MlabFramebuffer {
+            pixels,
+            dims,
+            arithmetic: PhantomData,
+        })
     }
 
     /// [`new`](Self::new), then [`clear`](Self::clear).
@@ -254,10 +263,10 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
         self.pixels.fill([Row::EMPTY; M]);
     }
 
-    /// Insert a fragment at `(x, y)` with Listing 1.
+    /// Insert a fragment at `(x, y)` with Listing 1 (quantized by `A`).
     #[inline]
     pub fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
-        self.insert_row(x, y, fragment.row())
+        self.insert_row(x, y, A::quantize(fragment))
     }
 
     /// Insert a quantized row at `(x, y)` with Listing 1.
@@ -265,7 +274,7 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
     pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
         let i = self.dims.index(x, y)?;
         if let Some(p) = self.pixels.get_mut(i) {
-            mlab::insert(p, row);
+            mlab::insert_with::<A, M>(p, row);
         }
         Ok(())
     }
@@ -292,14 +301,16 @@ impl<'a, const M: usize> MlabFramebuffer<'a, M> {
 }
 
 /// A Hybrid Transparency framebuffer: per pixel `K` head rows then one tail slot
-/// (`K + 1` row-sized slots, `8 * (K + 1)` bytes) over borrowed storage.
+/// (`K + 1` row-sized slots, `8 * (K + 1)` bytes) over borrowed storage, in the arithmetic
+/// `A` (which picks the tail layout: [`Tail`](crate::Tail) by default).
 #[derive(Debug)]
-pub struct HybridFramebuffer<'a, const K: usize> {
+pub struct HybridFramebuffer<'a, const K: usize, A: Arithmetic = Unbiased> {
     rows: &'a mut [Row],
     dims: Dims,
+    arithmetic: PhantomData<A>,
 }
 
-impl<'a, const K: usize> HybridFramebuffer<'a, K> {
+impl<'a, const K: usize, A: Arithmetic> HybridFramebuffer<'a, K, A> {
     /// Rows of storage needed for `width x height` pixels (`width * height * (K + 1)`).
     pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
         Dims { width, height }.rows_needed(K + 1)
@@ -313,7 +324,11 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
     pub fn new(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
         let dims = Dims { width, height };
         dims.check_storage(K + 1, storage.len())?;
-        Ok(HybridFramebuffer { rows: storage, dims })
+        Ok(HybridFramebuffer {
+            rows: storage,
+            dims,
+            arithmetic: PhantomData,
+        })
     }
 
     /// [`new`](Self::new), then [`clear`](Self::clear): the way to start a frame.
@@ -327,12 +342,12 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
         self.rows
     }
 
-    fn split(pixel: &[Row]) -> ([Row; K], Tail) {
+    fn split(pixel: &[Row]) -> ([Row; K], A::Tail) {
         let mut head = [Row::EMPTY; K];
-        let mut tail = Tail::EMPTY;
+        let mut tail = A::Tail::EMPTY;
         if let Some((t, h)) = pixel.split_last() {
             head.copy_from_slice(&h[..K.min(h.len())]);
-            tail = Tail::from_bytes(t.to_bytes());
+            tail = A::Tail::from_bytes(t.to_bytes());
         }
         (head, tail)
     }
@@ -349,7 +364,7 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
         for p in self.rows.chunks_exact_mut(K + 1) {
             if let Some((t, h)) = p.split_last_mut() {
                 h.fill(Row::EMPTY);
-                *t = Row::from_bytes(Tail::EMPTY.to_bytes());
+                *t = Row::from_bytes(A::Tail::EMPTY.to_bytes());
             }
         }
     }
@@ -361,10 +376,10 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
             .ok_or(self.dims.out_of_bounds(x, y))
     }
 
-    /// Insert a fragment at `(x, y)` with Listing 2.
+    /// Insert a fragment at `(x, y)` with Listing 2 (quantized by `A`).
     #[inline]
     pub fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
-        self.insert_row(x, y, fragment.row())
+        self.insert_row(x, y, A::quantize(fragment))
     }
 
     /// Insert a quantized row at `(x, y)` with Listing 2.
@@ -375,7 +390,7 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
             && let Some((t, h)) = p.split_last_mut()
             && let Ok(head) = <&mut [Row; K]>::try_from(h)
         {
-            let mut tail = Tail::from_bytes(t.to_bytes());
+            let mut tail = A::Tail::from_bytes(t.to_bytes());
             hybrid::insert(head, &mut tail, row);
             *t = Row::from_bytes(tail.to_bytes());
         }
@@ -383,7 +398,7 @@ impl<'a, const K: usize> HybridFramebuffer<'a, K> {
     }
 
     /// Head rows and tail of pixel `(x, y)`.
-    pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], Tail), FramebufferError> {
+    pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], A::Tail), FramebufferError> {
         self.pixel_slots(x, y).map(Self::split)
     }
 

@@ -32,6 +32,7 @@
 //! (`min(a + b, MAX)` composed in any order is `min(sum, MAX)`), so the bytes of a
 //! [`Hybrid`] do not depend on submission order.
 
+use crate::arith::{Arithmetic, Kind, Unbiased};
 use crate::fragment::Fragment;
 use crate::lanes::{FloatLanes, RowLanes, Slot};
 use crate::resolve::{INV255, Resolved};
@@ -39,8 +40,151 @@ use crate::row::Row;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// The 8-byte tail of Hybrid Transparency: exact saturating sums over the fragments that
-/// left the head.
+/// What both HT tails offer ([`Tail`], the default, and [`PaperTail`]): exact saturating
+/// integer sums over the fragments that left the head, in units of `1/255`. Sealed.
+pub trait TailFormat:
+    sealed::Sealed + Pod + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
+{
+    /// No fragment accumulated (all bits zero).
+    const EMPTY: Self;
+    /// Which layout (used by the lane code).
+    #[doc(hidden)]
+    const KIND: Kind;
+    /// Largest value of each color sum.
+    const COLOR_MAX: u32;
+    /// Largest value of the alpha sum.
+    const ALPHA_MAX: u32;
+    /// Largest fragment count.
+    const COUNT_MAX: u32;
+
+    /// A tail from its fields; values above the field maxima saturate (spare bits 0).
+    fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> Self;
+    /// Sums of premultiplied color bytes `[R, G, B]`.
+    fn color_sum(self) -> [u32; 3];
+    /// Sum of alpha bytes (`255 - T`).
+    fn alpha_sum(self) -> u32;
+    /// Number of fragments accumulated.
+    fn count(self) -> u32;
+
+    /// Accumulate a row that left the head, unless it is invisible (no color, `T = 255`).
+    /// Every field saturates, never wraps.
+    #[inline]
+    fn add(&mut self, row: Row) {
+        if row.is_invisible() {
+            return;
+        }
+        let [r, g, b, t] = row.rgbt();
+        let [cr, cg, cb] = self.color_sum();
+        *self = self.with_sums(
+            [cr + r as u32, cg + g as u32, cb + b as u32],
+            self.alpha_sum() + (255 - t) as u32,
+            self.count() + 1,
+        );
+    }
+
+    /// [`from_sums`](Self::from_sums), keeping this tail's spare bits.
+    #[doc(hidden)]
+    fn with_sums(self, color: [u32; 3], alpha: u32, count: u32) -> Self;
+
+    /// True when any field is at its maximum: the tail has (or may have) stopped counting.
+    fn saturated(self) -> bool {
+        let c = self.color_sum();
+        c.iter().any(|&v| v >= Self::COLOR_MAX)
+            || self.alpha_sum() >= Self::ALPHA_MAX
+            || self.count() >= Self::COUNT_MAX
+    }
+
+    /// The 8 bytes.
+    fn to_bytes(self) -> [u8; 8] {
+        bytemuck::cast(self)
+    }
+
+    /// The tail from 8 bytes (any bytes are a valid tail).
+    fn from_bytes(bytes: [u8; 8]) -> Self {
+        bytemuck::cast(bytes)
+    }
+
+    /// Resolve the tail alone (Bavoil-Myers, see the [module docs](self)).
+    ///
+    /// Any tail bytes give a finite result: color channels in `[0, COLOR_MAX / 255]` (the
+    /// tail never amplifies its light), transmittance in `[0, 1]` (a mean alpha above 1,
+    /// possible only in arbitrary bytes, is clamped to 1; a zero count resolves as if the
+    /// count were 1).
+    #[inline]
+    fn resolve(self) -> Resolved {
+        let (color, t) = tail_lanes::<f32>(self.color_sum(), self.alpha_sum(), self.count());
+        Resolved {
+            color: Vec3::from_array(color),
+            transmittance: t,
+        }
+    }
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for super::Tail {}
+    impl Sealed for super::PaperTail {}
+}
+
+/// The [`TailFormat`] methods as inherent methods of a tail type, so that they need no
+/// trait import (`tail.count()` would otherwise resolve to `Iterator::count` in the error).
+macro_rules! tail_methods {
+    ($t:ty) => {
+        impl $t {
+            /// No fragment accumulated.
+            pub const EMPTY: $t = <$t as TailFormat>::EMPTY;
+
+            /// Sums of premultiplied color bytes `[R, G, B]` ([`TailFormat::color_sum`]).
+            pub fn color_sum(self) -> [u32; 3] {
+                <$t as TailFormat>::color_sum(self)
+            }
+
+            /// Sum of alpha bytes ([`TailFormat::alpha_sum`]).
+            pub fn alpha_sum(self) -> u32 {
+                <$t as TailFormat>::alpha_sum(self)
+            }
+
+            /// Number of fragments accumulated ([`TailFormat::count`]).
+            pub fn count(self) -> u32 {
+                <$t as TailFormat>::count(self)
+            }
+
+            /// Accumulate a row ([`TailFormat::add`]).
+            pub fn add(&mut self, row: Row) {
+                <$t as TailFormat>::add(self, row)
+            }
+
+            /// Whether any field is at its maximum ([`TailFormat::saturated`]).
+            pub fn saturated(self) -> bool {
+                <$t as TailFormat>::saturated(self)
+            }
+
+            /// Resolve the tail alone ([`TailFormat::resolve`]).
+            pub fn resolve(self) -> Resolved {
+                <$t as TailFormat>::resolve(self)
+            }
+
+            /// A tail from its fields, saturating ([`TailFormat::from_sums`]).
+            pub fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> $t {
+                <$t as TailFormat>::from_sums(color, alpha, count)
+            }
+
+            /// The 8 bytes.
+            pub fn to_bytes(self) -> [u8; 8] {
+                <$t as TailFormat>::to_bytes(self)
+            }
+
+            /// The tail from 8 bytes (any bytes are a valid tail).
+            pub fn from_bytes(bytes: [u8; 8]) -> $t {
+                <$t as TailFormat>::from_bytes(bytes)
+            }
+        }
+    };
+}
+tail_methods!(Tail);
+tail_methods!(PaperTail);
+
+/// The paper's 8-byte tail of Hybrid Transparency ([`Paper`](crate::Paper) arithmetic).
 ///
 /// | bits of `word0` (bytes 0..4, LE) | field |
 /// |---|---|
@@ -55,127 +199,206 @@ use glam::Vec3;
 /// | 16..32 | fragment count, saturates at 65535 |
 ///
 /// Units are those of the row: one unit is `1/255`. The all-zero tail is the empty tail.
+/// The color sums saturate at 4.0, which 200 fragments of alpha 0.03 already exceed: the
+/// default [`Tail`] does not.
 ///
 /// ```
-/// use mlab::{Row, Tail};
-/// let mut tail = Tail::EMPTY;
+/// use mlab::{Row, hybrid::PaperTail};
+/// let mut tail = PaperTail::EMPTY;
 /// tail.add(Row::new([255, 2, 3], 128, 5.0));
 /// assert_eq!(tail.words(), [255 | 2 << 10 | 3 << 20, 127 | 1 << 16]);
 /// assert_eq!(tail.to_bytes(), [0xff, 0x08, 0x30, 0x00, 0x7f, 0x00, 0x01, 0x00]);
 /// ```
 #[repr(C, align(8))]
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default, Pod, Zeroable)]
-pub struct Tail {
+pub struct PaperTail {
     word0: [u8; 4],
     word1: [u8; 4],
 }
 
-const _: () = assert!(core::mem::size_of::<Tail>() == 8);
-const _: () = assert!(core::mem::align_of::<Tail>() == 8);
+const _: () = assert!(core::mem::size_of::<PaperTail>() == 8);
+const _: () = assert!(core::mem::align_of::<PaperTail>() == 8);
 
-/// Largest value of a 10-bit color sum.
+/// Largest value of a 10-bit color sum of the [`PaperTail`].
 pub const TAIL_COLOR_MAX: u32 = 1023;
-/// Largest value of the 16-bit alpha sum and of the count.
+/// Largest value of the 16-bit alpha sum of the [`PaperTail`].
 pub const TAIL_ALPHA_MAX: u32 = 65535;
-/// Largest fragment count.
+/// Largest fragment count of the [`PaperTail`].
 pub const TAIL_COUNT_MAX: u32 = 65535;
 
-impl Tail {
-    /// No fragment accumulated.
-    pub const EMPTY: Tail = Tail {
-        word0: [0; 4],
-        word1: [0; 4],
-    };
-
+impl PaperTail {
     /// The tail from its two little-endian words.
-    pub const fn from_words(words: [u32; 2]) -> Tail {
-        Tail {
+    pub const fn from_words(words: [u32; 2]) -> PaperTail {
+        PaperTail {
             word0: words[0].to_le_bytes(),
             word1: words[1].to_le_bytes(),
         }
     }
 
-    /// The two words (layout in the [type docs](Tail)).
+    /// The two words (layout in the [type docs](PaperTail)).
     pub const fn words(self) -> [u32; 2] {
         [u32::from_le_bytes(self.word0), u32::from_le_bytes(self.word1)]
-    }
-
-    /// The tail from 8 bytes.
-    pub const fn from_bytes(b: [u8; 8]) -> Tail {
-        Tail {
-            word0: [b[0], b[1], b[2], b[3]],
-            word1: [b[4], b[5], b[6], b[7]],
-        }
-    }
-
-    /// The 8 bytes.
-    pub const fn to_bytes(self) -> [u8; 8] {
-        let [a, b, c, d] = self.word0;
-        let [e, f, g, h] = self.word1;
-        [a, b, c, d, e, f, g, h]
-    }
-
-    /// A tail from its fields; values above the field maxima saturate. Spare bits are 0.
-    pub fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> Tail {
-        let c = color.map(|v| v.min(TAIL_COLOR_MAX));
-        Tail::from_words([
-            c[0] | c[1] << 10 | c[2] << 20,
-            alpha.min(TAIL_ALPHA_MAX) | count.min(TAIL_COUNT_MAX) << 16,
-        ])
-    }
-
-    /// Sums of premultiplied color bytes `[R, G, B]`.
-    pub const fn color_sum(self) -> [u32; 3] {
-        let w = self.words()[0];
-        [w & 0x3ff, (w >> 10) & 0x3ff, (w >> 20) & 0x3ff]
-    }
-
-    /// Sum of alpha bytes.
-    pub const fn alpha_sum(self) -> u32 {
-        self.words()[1] & 0xffff
-    }
-
-    /// Number of fragments accumulated.
-    pub const fn count(self) -> u32 {
-        self.words()[1] >> 16
     }
 
     /// The two spare bits (30 and 31 of `word0`).
     pub const fn spare(self) -> u32 {
         self.words()[0] >> 30
     }
+}
 
-    /// Accumulate a row that left the head, unless it is invisible (no color, `T = 255`).
-    /// Every field saturates. Spare bits are preserved.
-    #[inline]
-    pub fn add(&mut self, row: Row) {
-        if row.is_invisible() {
-            return;
-        }
-        let [r, g, b, t] = row.rgbt();
-        let [cr, cg, cb] = self.color_sum();
-        let w0 = (cr + r as u32).min(TAIL_COLOR_MAX)
-            | (cg + g as u32).min(TAIL_COLOR_MAX) << 10
-            | (cb + b as u32).min(TAIL_COLOR_MAX) << 20
-            | self.spare() << 30;
-        let w1 =
-            (self.alpha_sum() + (255 - t) as u32).min(TAIL_ALPHA_MAX) | (self.count() + 1).min(TAIL_COUNT_MAX) << 16;
-        *self = Tail::from_words([w0, w1]);
+impl TailFormat for PaperTail {
+    const EMPTY: PaperTail = PaperTail {
+        word0: [0; 4],
+        word1: [0; 4],
+    };
+    const KIND: Kind = Kind::Paper;
+    const COLOR_MAX: u32 = TAIL_COLOR_MAX;
+    const ALPHA_MAX: u32 = TAIL_ALPHA_MAX;
+    const COUNT_MAX: u32 = TAIL_COUNT_MAX;
+
+    fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> PaperTail {
+        PaperTail::EMPTY.with_sums(color, alpha, count)
     }
 
-    /// Resolve the tail alone (Bavoil-Myers, see the [module docs](self)).
-    ///
-    /// Any tail bytes give a finite result: color channels in `[0, 1023 * INV255]` (INV255 =
-    /// f32 `1/255`; the tail never amplifies its light),
-    /// transmittance in `[0, 1]` (a mean alpha above 1, possible only in arbitrary bytes,
-    /// is clamped to 1; a zero count resolves as if the count were 1).
-    #[inline]
-    pub fn resolve(self) -> Resolved {
-        let (color, t) = tail_lanes::<f32>(self.color_sum(), self.alpha_sum(), self.count());
-        Resolved {
-            color: Vec3::from_array(color),
-            transmittance: t,
-        }
+    #[inline(always)]
+    fn with_sums(self, color: [u32; 3], alpha: u32, count: u32) -> PaperTail {
+        let c = color.map(|v| v.min(TAIL_COLOR_MAX));
+        PaperTail::from_words([
+            c[0] | c[1] << 10 | c[2] << 20 | self.spare() << 30,
+            alpha.min(TAIL_ALPHA_MAX) | count.min(TAIL_COUNT_MAX) << 16,
+        ])
+    }
+
+    #[inline(always)]
+    fn color_sum(self) -> [u32; 3] {
+        let w = self.words()[0];
+        [w & 0x3ff, (w >> 10) & 0x3ff, (w >> 20) & 0x3ff]
+    }
+
+    #[inline(always)]
+    fn alpha_sum(self) -> u32 {
+        self.words()[1] & 0xffff
+    }
+
+    #[inline(always)]
+    fn count(self) -> u32 {
+        self.words()[1] >> 16
+    }
+}
+
+/// Width in bits of each color sum and of the alpha sum of the default [`Tail`].
+pub const WIDE_SUM_BITS: u32 = 13;
+/// Width in bits of the fragment count of the default [`Tail`].
+pub const WIDE_COUNT_BITS: u32 = 12;
+
+/// The default 8-byte tail of Hybrid Transparency ([`Unbiased`](crate::Unbiased)
+/// arithmetic): the same exact saturating sums as the paper's, re-split so that they do not
+/// saturate on dense content. Read as one little-endian `u64` (`word0 | word1 << 32`):
+///
+/// | bits | field | saturates at |
+/// |---|---|---|
+/// | 0..13 | sum of premultiplied R bytes | 8191 (32.1 in color units) |
+/// | 13..26 | sum of premultiplied G bytes | 8191 |
+/// | 26..39 | sum of premultiplied B bytes | 8191 |
+/// | 39..52 | sum of alpha bytes (`255 - T`) | 8191 (32.1 in alpha units) |
+/// | 52..64 | fragment count | 4095 |
+///
+/// Units are those of the row (`1/255`), so the sums are exact and every fragment's
+/// contribution depends on that fragment alone: the tail is exactly order independent, as
+/// the paper's. Departure from the paper (3 x 10-bit colors, 16-bit alpha and count): the
+/// colors and the alpha get the same range, 8x the paper's color range. The alpha sum
+/// reaches 32.1 only where the tail's transmittance is below `e^-32`, and a count above
+/// 4095 would need 4095 fragments in one pixel's tail.
+///
+/// ```
+/// use mlab::{Row, Tail};
+/// let mut tail = Tail::EMPTY;
+/// tail.add(Row::new([255, 2, 3], 128, 5.0));
+/// assert_eq!(tail.to_le_u64(), 255 | 2 << 13 | 3 << 26 | 127 << 39 | 1 << 52);
+/// assert_eq!(tail.to_bytes(), [0xff, 0x40, 0x00, 0x0c, 0x80, 0x3f, 0x10, 0x00]);
+/// ```
+#[repr(C, align(8))]
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Default, Pod, Zeroable)]
+pub struct Tail {
+    bytes: [u8; 8],
+}
+
+const _: () = assert!(core::mem::size_of::<Tail>() == 8);
+const _: () = assert!(core::mem::align_of::<Tail>() == 8);
+
+const WIDE_SUM_MAX: u64 = (1 << WIDE_SUM_BITS) - 1;
+const WIDE_COUNT_MAX: u64 = (1 << WIDE_COUNT_BITS) - 1;
+
+impl Tail {
+    /// The tail as one little-endian `u64` (layout in the [type docs](Tail)).
+    pub const fn to_le_u64(self) -> u64 {
+        u64::from_le_bytes(self.bytes)
+    }
+
+    /// The tail from one little-endian `u64`.
+    pub const fn from_le_u64(v: u64) -> Tail {
+        Tail { bytes: v.to_le_bytes() }
+    }
+
+    /// The two little-endian words (`word0` = bits 0..32).
+    pub const fn words(self) -> [u32; 2] {
+        let v = self.to_le_u64();
+        [v as u32, (v >> 32) as u32]
+    }
+
+    /// The tail from its two little-endian words.
+    pub const fn from_words(words: [u32; 2]) -> Tail {
+        Tail::from_le_u64(words[0] as u64 | (words[1] as u64) << 32)
+    }
+
+    #[inline(always)]
+    const fn field(self, shift: u32, max: u64) -> u32 {
+        ((self.to_le_u64() >> shift) & max) as u32
+    }
+}
+
+impl TailFormat for Tail {
+    const EMPTY: Tail = Tail { bytes: [0; 8] };
+    const KIND: Kind = Kind::Unbiased;
+    const COLOR_MAX: u32 = WIDE_SUM_MAX as u32;
+    const ALPHA_MAX: u32 = WIDE_SUM_MAX as u32;
+    const COUNT_MAX: u32 = WIDE_COUNT_MAX as u32;
+
+    fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> Tail {
+        Tail::EMPTY.with_sums(color, alpha, count)
+    }
+
+    #[inline(always)]
+    fn with_sums(self, color: [u32; 3], alpha: u32, count: u32) -> Tail {
+        let s = |v: u32| (v as u64).min(WIDE_SUM_MAX);
+        let b = WIDE_SUM_BITS;
+        Tail::from_le_u64(
+            s(color[0])
+                | s(color[1]) << b
+                | s(color[2]) << (2 * b)
+                | s(alpha) << (3 * b)
+                | (count as u64).min(WIDE_COUNT_MAX) << (4 * b),
+        )
+    }
+
+    #[inline(always)]
+    fn color_sum(self) -> [u32; 3] {
+        let b = WIDE_SUM_BITS;
+        [
+            self.field(0, WIDE_SUM_MAX),
+            self.field(b, WIDE_SUM_MAX),
+            self.field(2 * b, WIDE_SUM_MAX),
+        ]
+    }
+
+    #[inline(always)]
+    fn alpha_sum(self) -> u32 {
+        self.field(3 * WIDE_SUM_BITS, WIDE_SUM_MAX)
+    }
+
+    #[inline(always)]
+    fn count(self) -> u32 {
+        self.field(4 * WIDE_SUM_BITS, WIDE_COUNT_MAX)
     }
 }
 
@@ -243,11 +466,11 @@ pub(crate) fn resolve_lanes<F: FloatLanes>(
     combine_lanes(head, tail_lanes::<F>(sums, alpha, count))
 }
 
-impl core::fmt::Debug for Tail {
+impl core::fmt::Debug for PaperTail {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         write!(
             f,
-            "Tail {{ color: {:?}, alpha: {}, count: {}, spare: {} }}",
+            "PaperTail {{ color: {:?}, alpha: {}, count: {}, spare: {} }}",
             self.color_sum(),
             self.alpha_sum(),
             self.count(),
@@ -256,18 +479,31 @@ impl core::fmt::Debug for Tail {
     }
 }
 
+impl core::fmt::Debug for Tail {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "Tail {{ color: {:?}, alpha: {}, count: {} }}",
+            self.color_sum(),
+            self.alpha_sum(),
+            self.count()
+        )
+    }
+}
+
 /// Listing 2 on `K` head rows and a tail: insert `row` into the head, accumulate the row
-/// pushed out into the tail. `K = 0` is allowed (every fragment goes to the tail).
+/// pushed out into the tail. `K = 0` is allowed (every fragment goes to the tail). The tail
+/// type picks the layout: [`Tail`] (default) or [`PaperTail`].
 #[inline]
-pub fn insert<const K: usize>(head: &mut [Row; K], tail: &mut Tail, row: Row) {
-    insert_lanes(head, tail, row, true);
+pub fn insert<T: TailFormat, const K: usize>(head: &mut [Row; K], tail: &mut T, row: Row) {
+    insert_lanes::<_, _, _, T, K>(head, tail, row, true);
 }
 
 /// Listing 2, written once for every lane width; lanes where `on` is false are untouched.
 #[inline(always)]
-pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, T: Slot<L::Tail>, const K: usize>(
+pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, TS: Slot<L::Tail<T>>, T: TailFormat, const K: usize>(
     b: &mut [S; K],
-    tail: &mut T,
+    tail: &mut TS,
     fragment: L,
     on: L::Mask,
 ) {
@@ -281,13 +517,13 @@ pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, T: Slot<L::Tail>, const K: u
     }
     // Update tail if the row pushed out carries color or opacity.
     let t = tail.load();
-    tail.store(L::select_tail(on, L::tail_add(t, f), t));
+    tail.store(L::select_tail(on, L::tail_add::<T>(t, f), t));
 }
 
 /// Resolve head and tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`, where
-/// the head is Eq. 5 over its rows and the tail is [`Tail::resolve`].
+/// the head is Eq. 5 over its rows and the tail is [`TailFormat::resolve`].
 #[inline]
-pub fn resolve(head: &[Row], tail: Tail) -> Resolved {
+pub fn resolve<T: TailFormat>(head: &[Row], tail: T) -> Resolved {
     let h = crate::resolve::resolve_layers(head.iter().map(crate::resolve::row_bytes));
     let ([r, g, b], t) = resolve_lanes::<f32>(h, tail.color_sum(), tail.alpha_sum(), tail.count());
     Resolved {
@@ -296,10 +532,12 @@ pub fn resolve(head: &[Row], tail: Tail) -> Resolved {
     }
 }
 
-/// A Hybrid Transparency pixel: `K` head rows and a tail, `8 * (K + 1)` bytes.
+/// A Hybrid Transparency pixel: `K` head rows and a tail, `8 * (K + 1)` bytes, in the
+/// arithmetic `A` ([`Unbiased`] by default: the [`Tail`] layout and dithered
+/// quantization; [`Paper`](crate::Paper): the paper's [`PaperTail`] and rounding).
 ///
 /// ```
-/// use glam::Vec3;
+/// use mlab::glam::Vec3;
 /// use mlab::{Fragment, Hybrid};
 /// let mut h = Hybrid::<1>::new();
 /// h.insert(&Fragment::straight(Vec3::X, 0.5, 1.0)?);
@@ -311,12 +549,12 @@ pub fn resolve(head: &[Row], tail: Tail) -> Resolved {
 /// ```
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 #[repr(C)]
-pub struct Hybrid<const K: usize> {
+pub struct Hybrid<const K: usize, A: Arithmetic = Unbiased> {
     head: [Row; K],
-    tail: Tail,
+    tail: A::Tail,
 }
 
-impl<const K: usize> Hybrid<K> {
+impl<const K: usize, A: Arithmetic> Hybrid<K, A> {
     /// Size in bytes (`8 * (K + 1)`).
     pub const BYTES: usize = 8 * (K + 1);
 
@@ -324,12 +562,12 @@ impl<const K: usize> Hybrid<K> {
     pub const fn new() -> Self {
         Hybrid {
             head: [Row::EMPTY; K],
-            tail: Tail::EMPTY,
+            tail: A::Tail::EMPTY,
         }
     }
 
     /// From stored head rows and tail (any bytes are accepted).
-    pub const fn from_parts(head: [Row; K], tail: Tail) -> Self {
+    pub const fn from_parts(head: [Row; K], tail: A::Tail) -> Self {
         Hybrid { head, tail }
     }
 
@@ -339,7 +577,7 @@ impl<const K: usize> Hybrid<K> {
     }
 
     /// The tail.
-    pub const fn tail(&self) -> Tail {
+    pub const fn tail(&self) -> A::Tail {
         self.tail
     }
 
@@ -348,10 +586,10 @@ impl<const K: usize> Hybrid<K> {
         *self = Self::new();
     }
 
-    /// Insert a validated fragment with Listing 2.
+    /// Insert a validated fragment with Listing 2 (quantized once, by `A`).
     #[inline]
     pub fn insert(&mut self, fragment: &Fragment) {
-        insert(&mut self.head, &mut self.tail, fragment.row());
+        insert(&mut self.head, &mut self.tail, A::quantize(fragment));
     }
 
     /// Insert an already quantized row with Listing 2.
@@ -367,7 +605,7 @@ impl<const K: usize> Hybrid<K> {
     }
 }
 
-impl<const K: usize> Default for Hybrid<K> {
+impl<const K: usize, A: Arithmetic> Default for Hybrid<K, A> {
     fn default() -> Self {
         Self::new()
     }
@@ -379,24 +617,24 @@ mod tests {
 
     #[test]
     fn tail_saturates_instead_of_wrapping() {
-        let mut t = Tail::EMPTY;
+        let mut t = PaperTail::EMPTY;
         for _ in 0..10 {
             t.add(Row::new([255, 0, 128], 0, 1.0));
         }
         assert_eq!(t.color_sum(), [1023, 0, 1023]);
         assert_eq!(t.alpha_sum(), 2550);
         assert_eq!(t.count(), 10);
-        let mut t = Tail::from_words([0, 0xffff_ffff]);
+        let mut t = PaperTail::from_words([0, 0xffff_ffff]);
         t.add(Row::new([0, 0, 0], 0, 1.0));
         assert_eq!((t.alpha_sum(), t.count()), (65535, 65535));
     }
 
     #[test]
     fn tail_skips_only_invisible_rows_and_keeps_spare_bits() {
-        let mut t = Tail::from_words([3 << 30, 0]);
+        let mut t = PaperTail::from_words([3 << 30, 0]);
         t.add(Row::EMPTY);
         t.add(Row::new([0, 0, 0], 255, 1.0));
-        assert_eq!(t, Tail::from_words([3 << 30, 0]));
+        assert_eq!(t, PaperTail::from_words([3 << 30, 0]));
         t.add(Row::new([9, 0, 0], 255, 1.0)); // additive light is kept
         assert_eq!(
             (t.color_sum(), t.alpha_sum(), t.count(), t.spare()),
@@ -406,7 +644,7 @@ mod tests {
 
     /// Bavoil-Myers in f64 as printed, with the documented handling of arbitrary bytes
     /// (count 0 as count 1, mean alpha clamped to 1).
-    fn bavoil_myers(t: Tail) -> (f64, f64) {
+    fn bavoil_myers(t: PaperTail) -> (f64, f64) {
         let n = t.count().max(1) as f64;
         let s_a = t.alpha_sum() as f64 / 255.0;
         let x = 1.0 - (s_a / n).min(1.0);
@@ -427,7 +665,7 @@ mod tests {
             (12, 0, 7), // pure additive light
         ];
         for (c, a, n) in cases {
-            let t = Tail::from_sums([c, 0, 0], a, n);
+            let t = PaperTail::from_sums([c, 0, 0], a, n);
             let r = t.resolve();
             let (want_c, want_t) = bavoil_myers(t);
             // The documented precision: `1 - mean` is a multiple of 2^-24, so |dT| <= n 2^-24,
@@ -445,7 +683,7 @@ mod tests {
 
     #[test]
     fn additive_tail_adds_its_light() {
-        let mut t = Tail::EMPTY;
+        let mut t = PaperTail::EMPTY;
         t.add(Row::new([51, 0, 0], 255, 1.0));
         t.add(Row::new([51, 0, 0], 255, 2.0));
         let r = t.resolve();

@@ -34,22 +34,23 @@
 //! use mlab::Row;
 //! let mut span = [[Row::EMPTY; 8]; 4]; // 8 pixels, M = 4, layer-major
 //! let frags = FragmentLanes {
-//!     color: [[0.5; 8], [0.0; 8], [0.0; 8]],
-//!     alpha: [0.5; 8],
+//!     color: [[0.4; 8], [0.0; 8], [0.0; 8]],
+//!     alpha: [0.6; 8],
 //!     depth: [1.0, 2.0, 3.0, f32::NAN, 5.0, 6.0, 7.0, 8.0],
 //! };
 //! let invalid = lanes::mlab_insert_fragments(&mut span, &frags, 0b0111_1111);
 //! assert_eq!(invalid, 0b0000_1000); // lane 3 has a NaN depth: untouched, reported
 //! assert_eq!(span[0][7], Row::EMPTY); // lane 7 was off
-//! assert_eq!(span[0][0], Row::new([128, 0, 0], 127, 1.0));
+//! assert_eq!(span[0][0], Row::new([102, 0, 0], 102, 1.0)); // 0.4 and 0.6 are exact bytes
 //! ```
 
-use crate::hybrid::Tail;
+use crate::arith::{Arithmetic, Kind, MIX_K, Unbiased};
+use crate::hybrid::TailFormat;
 use crate::resolve::{Background, Resolved};
 use crate::row::Row;
 use bytemuck::cast;
 use glam::Vec4;
-use wide::{f32x8, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
+use wide::{f32x8, f64x4, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
 
 /// Pixels per lane group.
 pub const LANES: usize = 8;
@@ -71,23 +72,23 @@ pub const BACKEND: &str = if cfg!(target_feature = "avx2") {
 pub(crate) trait RowLanes: Copy {
     /// Per-lane condition.
     type Mask: Copy + core::ops::BitAnd<Output = Self::Mask>;
-    /// Per-lane HT tail.
-    type Tail: Copy;
+    /// Per-lane HT tail of layout `T`.
+    type Tail<T: TailFormat>: Copy;
     /// `self.z <= other.z` in IEEE f32 (false when either is NaN).
     fn depth_le(self, other: Self) -> Self::Mask;
     /// `if mask { a } else { b }` per lane.
     fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
-    /// Eq. 7-8 per lane ([`crate::mlab::merge`]).
-    fn merge(front: Self, back: Self) -> Self;
-    /// [`Tail::add`] per lane.
-    fn tail_add(tail: Self::Tail, row: Self) -> Self::Tail;
+    /// Eq. 7-8 per lane in the arithmetic `A` ([`Arithmetic::merge`]).
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self;
+    /// [`TailFormat::add`] per lane.
+    fn tail_add<T: TailFormat>(tail: Self::Tail<T>, row: Self) -> Self::Tail<T>;
     /// `if mask { a } else { b }` per lane, for tails.
-    fn select_tail(mask: Self::Mask, a: Self::Tail, b: Self::Tail) -> Self::Tail;
+    fn select_tail<T: TailFormat>(mask: Self::Mask, a: Self::Tail<T>, b: Self::Tail<T>) -> Self::Tail<T>;
 }
 
 impl RowLanes for Row {
     type Mask = bool;
-    type Tail = Tail;
+    type Tail<T: TailFormat> = T;
     #[inline(always)]
     fn depth_le(self, other: Self) -> bool {
         self.depth() <= other.depth()
@@ -98,17 +99,17 @@ impl RowLanes for Row {
         Row::from_le_u64(core::hint::select_unpredictable(mask, a.to_le_u64(), b.to_le_u64()))
     }
     #[inline(always)]
-    fn merge(front: Self, back: Self) -> Self {
-        crate::mlab::merge(front, back)
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
+        A::merge(front, back)
     }
     #[inline(always)]
-    fn tail_add(tail: Tail, row: Self) -> Tail {
+    fn tail_add<T: TailFormat>(tail: T, row: Self) -> T {
         let mut t = tail;
         t.add(row);
         t
     }
     #[inline(always)]
-    fn select_tail(mask: bool, a: Tail, b: Tail) -> Tail {
+    fn select_tail<T: TailFormat>(mask: bool, a: T, b: T) -> T {
         core::hint::select_unpredictable(mask, a, b)
     }
 }
@@ -134,13 +135,13 @@ impl Slot<Row> for Row {
     }
 }
 
-impl Slot<Tail> for Tail {
+impl<T: TailFormat> Slot<T> for T {
     #[inline(always)]
-    fn load(&self) -> Tail {
+    fn load(&self) -> T {
         *self
     }
     #[inline(always)]
-    fn store(&mut self, value: Tail) {
+    fn store(&mut self, value: T) {
         *self = value;
     }
 }
@@ -156,7 +157,7 @@ impl Slot<Rows8> for [Row; LANES] {
     }
 }
 
-impl Slot<Rows8> for [Tail; LANES] {
+impl<T: TailFormat> Slot<Rows8> for [T; LANES] {
     #[inline(always)]
     fn load(&self) -> Rows8 {
         Rows8::load_tails(self)
@@ -286,7 +287,8 @@ pub(crate) struct Rows8 {
     b: u32x8,
 }
 
-/// Per-lane mask for [`Rows8`]: all ones or all zeros over each 64-bit lane.
+/// Per-lane mask for [`Rows8`]: all ones or all zeros over each 64-bit lane (with AVX, only
+/// the sign bit of each 64-bit lane is meaningful: see [`BLENDV_PD`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Mask8 {
     a: u32x8,
@@ -346,27 +348,83 @@ fn div255_slots(x: u16x16) -> u16x16 {
     (x + u16x16::splat(128)).mul_keep_high(u16x16::splat(257))
 }
 
-/// Merge (Eq. 7-8) for four rows in one register: SWAR over 16-bit slots.
+/// `T_front` in both 16-bit slots of each row's low dword (the high dword is don't-care),
+/// and the back row's bytes 0 and 2 (R, B) and 1 and 3 (G, T), one per 16-bit slot.
 #[inline(always)]
-fn merge4(front: u32x8, back: u32x8) -> u32x8 {
-    // T_front in both 16-bit slots of the low dword (the high dword is don't-care).
+fn merge_operands(front: u32x8, back: u32x8) -> (u16x16, u16x16, u16x16) {
     let t = (front >> 24) & u32x8::splat(0xff);
     let t2: u16x16 = cast(t | (t << 16));
-    // Bytes 0 and 2 (R, B) and bytes 1 and 3 (G, T) of the back row, one per 16-bit slot.
     let even: u16x16 = cast(back & BYTES02);
     let odd: u16x16 = cast((back >> 8) & BYTES02);
-    let pe: u32x8 = cast(div255_slots(even * t2)); // each product <= 255 * 255: no carry
-    let po: u32x8 = cast(div255_slots(odd * t2));
-    let product = pe | (po << 8); // round(back.rgbt * T_front / 255), bytewise
-    // A_front + product, saturating; the front's T byte is replaced by the product's T.
+    (t2, even, odd)
+}
+
+/// `A_front + products` bytewise, saturating; the front's T byte is replaced by the
+/// product's T; the depth is the front's.
+#[inline(always)]
+fn merge_result(front: u32x8, pe: u16x16, po: u16x16) -> u32x8 {
+    let product = cast::<u16x16, u32x8>(pe) | (cast::<u16x16, u32x8>(po) << 8);
     let a_front = front & u32x8::splat(0x00ff_ffff);
     let sum: u32x8 = cast(cast::<u32x8, u8x32>(a_front).saturating_add(cast(product)));
     (sum & LO) | (front & HI)
 }
 
-/// [`Tail::add`] for four tails in one register.
+/// The paper's merge (Eq. 7-8) for four rows in one register: SWAR over 16-bit slots.
 #[inline(always)]
-fn tail_add4(tail: u32x8, row: u32x8) -> u32x8 {
+fn merge4_paper(front: u32x8, back: u32x8) -> u32x8 {
+    let (t2, even, odd) = merge_operands(front, back);
+    // Each product <= 255 * 255: no carry out of its slot.
+    merge_result(front, div255_slots(even * t2), div255_slots(odd * t2))
+}
+
+/// `[MIX_K; 16]`: the multiplier of [`crate::arith::mix16`].
+const K: u16x16 = u16x16::splat(MIX_K as u16);
+/// Turns `d` in both slots into `[255 - d, d + 1]` (G slot, T slot): `(d ^ 0xffff) + 256`
+/// is `255 - d` modulo 2^16.
+const ODD_XOR: u16x16 = u16x16::new([
+    0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0,
+]);
+const ODD_ADD: u16x16 = u16x16::new([256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1]);
+
+/// [`crate::arith::merge_dither`] of eight row pairs at once: `d` of pixel `p` in both
+/// 16-bit slots of the low dword of its 64-bit lane, lanes 0-3 in the first register and
+/// 4-7 in the second (high dwords don't-care). The eight folds share one register for the
+/// mix (pixels 0-3 in the low dwords, 4-7 in the high dwords).
+#[inline(always)]
+fn merge_dither8(front: Rows8, back: Rows8) -> (u16x16, u16x16) {
+    let fa = front.a ^ back.a;
+    let fb = front.b ^ back.b;
+    // word0 ^ word1 of each pair: in the low dword for a, in the high dword for b.
+    let xa = fa ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(fa) >> 32);
+    let xb = fb ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(fb) << 32);
+    let x = HI.select(xb, xa);
+    // Both 16-bit slots of each dword = lo ^ hi (x ^ rotate(x, 16)), then the multiplicative
+    // mix. Written as a rotate, LLVM emits one byte shuffle where it can.
+    let s: u16x16 = cast(x ^ ((x >> 16) | (x << 16)));
+    let s: u16x16 = s * K;
+    let d = s.mul_keep_high(u16x16::splat(255)); // 0..=254
+    let db = cast::<u64x4, u16x16>(cast::<u16x16, u64x4>(d) >> 32);
+    (d, db)
+}
+
+/// The unbiased merge ([`Unbiased`]) for four rows in one register, with their dither `d`
+/// ([`merge_dither8`]): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
+/// `d' = d` for T and `254 - d` for the colors.
+#[inline(always)]
+fn merge4_unbiased(front: u32x8, back: u32x8, d: u16x16) -> u32x8 {
+    let (t2, even, odd) = merge_operands(front, back);
+    let inv = u16x16::splat(255) - d; // (254 - d) + 1: R and B
+    let odd_d = (d ^ ODD_XOR) + ODD_ADD; // G: (254 - d) + 1, T: d + 1
+    let m257 = u16x16::splat(257);
+    // Products <= 65025, plus at most 255: no carry out of a slot.
+    let pe = (even * t2 + inv).mul_keep_high(m257);
+    let po = (odd * t2 + odd_d).mul_keep_high(m257);
+    merge_result(front, pe, po)
+}
+
+/// [`PaperTail`](crate::hybrid::PaperTail)`::add` for four tails in one register.
+#[inline(always)]
+fn tail_add4_paper(tail: u32x8, row: u32x8) -> u32x8 {
     let field = u32x8::splat(0x3ff);
     let byte = u32x8::splat(0xff);
     let max: i16x16 = i16x16::splat(1023);
@@ -399,25 +457,60 @@ impl Rows8 {
     }
 
     #[inline(always)]
-    fn load_tails(tails: &[Tail; 8]) -> Rows8 {
+    fn load_tails<T: TailFormat>(tails: &[T; 8]) -> Rows8 {
         let [a, b]: [u32x8; 2] = cast(*tails);
         Rows8 { a, b }
     }
 
     #[inline(always)]
-    fn store_tails(self) -> [Tail; 8] {
+    fn store_tails<T: TailFormat>(self) -> [T; 8] {
         cast([self.a, self.b])
     }
 }
 
+/// Low dword masks for the fields of the wide tail.
+const BYTE_LO: u32x8 = u32x8::new([0xff, 0, 0xff, 0, 0xff, 0, 0xff, 0]);
+const SUM_LO: u32x8 = u32x8::new([0x1fff, 0, 0x1fff, 0, 0x1fff, 0, 0x1fff, 0]);
+const ONE_LO: u32x8 = u32x8::new([1, 0, 1, 0, 1, 0, 1, 0]);
+
+/// [`Tail`](crate::Tail)`::add` for four tails in one register (each tail one `u64`:
+/// colors at bits 0, 13, 26, alpha at 39, count at 52).
+#[inline(always)]
+fn tail_add4_wide(tail: u32x8, row: u32x8) -> u32x8 {
+    let shr = |v: u32x8, n: u64| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(v) >> n);
+    let shl = |v: u32x8, n: u64| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(v) << n);
+    // Sums below 2^15 in the low 16-bit slot, zero elsewhere: i16 min is exact.
+    let sat = |v: u32x8, max: i16| -> u32x8 { cast(cast::<u32x8, i16x16>(v).min(i16x16::splat(max))) };
+    let r = row & BYTE_LO;
+    let g = (row >> 8) & BYTE_LO;
+    let b = (row >> 16) & BYTE_LO;
+    let a = ((row >> 24) ^ BYTE_LO) & BYTE_LO; // 255 - T
+    let sr = sat((tail & SUM_LO) + r, 8191);
+    let sg = sat(((tail >> 13) & SUM_LO) + g, 8191);
+    let sb = sat((shr(tail, 26) & SUM_LO) + b, 8191);
+    let sa = sat((shr(tail, 39) & SUM_LO) + a, 8191);
+    let sn = sat(shr(tail, 52) + ONE_LO, 4095);
+    let new = sr | (sg << 13) | shl(sb, 26) | shl(sa, 39) | shl(sn, 52);
+    // Invisible rows (no color, T = 255) are skipped.
+    let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
+    invisible.select(tail, new)
+}
+
+/// With AVX, a select of whole rows is `vblendvpd`, which reads only the sign bit of each
+/// 64-bit lane, that is the depth dword's compare result: the masks need no widening.
+/// Without AVX the select is bitwise and the masks are widened to whole lanes. Both give
+/// the same rows.
+const BLENDV_PD: bool = cfg!(target_feature = "avx");
+
 impl RowLanes for Rows8 {
     type Mask = Mask8;
-    type Tail = Rows8;
+    type Tail<T: TailFormat> = Rows8;
     #[inline(always)]
     fn depth_le(self, other: Self) -> Mask8 {
         let le = |x: u32x8, y: u32x8| {
-            let m: f32x8 = cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y));
-            widen_hi(cast::<f32x8, u32x8>(m))
+            let m = cast::<f32x8, u32x8>(cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y)));
+            // Only the high (depth) dword of each lane is meaningful.
+            if BLENDV_PD { m } else { widen_hi(m) }
         };
         Mask8 {
             a: le(self.a, other.a),
@@ -426,27 +519,47 @@ impl RowLanes for Rows8 {
     }
     #[inline(always)]
     fn select(mask: Mask8, x: Self, y: Self) -> Self {
+        let sel = |m: u32x8, p: u32x8, q: u32x8| -> u32x8 {
+            if BLENDV_PD {
+                cast(cast::<u32x8, f64x4>(m).select(cast::<u32x8, f64x4>(p), cast::<u32x8, f64x4>(q)))
+            } else {
+                m.select(p, q)
+            }
+        };
         Rows8 {
-            a: mask.a.select(x.a, y.a),
-            b: mask.b.select(x.b, y.b),
+            a: sel(mask.a, x.a, y.a),
+            b: sel(mask.b, x.b, y.b),
         }
     }
     #[inline(always)]
-    fn merge(front: Self, back: Self) -> Self {
-        Rows8 {
-            a: merge4(front.a, back.a),
-            b: merge4(front.b, back.b),
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
+        match A::KIND {
+            Kind::Paper => Rows8 {
+                a: merge4_paper(front.a, back.a),
+                b: merge4_paper(front.b, back.b),
+            },
+            Kind::Unbiased => {
+                let (da, db) = merge_dither8(front, back);
+                Rows8 {
+                    a: merge4_unbiased(front.a, back.a, da),
+                    b: merge4_unbiased(front.b, back.b, db),
+                }
+            }
         }
     }
     #[inline(always)]
-    fn tail_add(tail: Rows8, row: Self) -> Rows8 {
+    fn tail_add<T: TailFormat>(tail: Rows8, row: Self) -> Rows8 {
+        let f = match T::KIND {
+            Kind::Paper => tail_add4_paper,
+            Kind::Unbiased => tail_add4_wide,
+        };
         Rows8 {
-            a: tail_add4(tail.a, row.a),
-            b: tail_add4(tail.b, row.b),
+            a: f(tail.a, row.a),
+            b: f(tail.b, row.b),
         }
     }
     #[inline(always)]
-    fn select_tail(mask: Mask8, x: Rows8, y: Rows8) -> Rows8 {
+    fn select_tail<T: TailFormat>(mask: Mask8, x: Rows8, y: Rows8) -> Rows8 {
         Self::select(mask, x, y)
     }
 }
@@ -459,64 +572,72 @@ impl RowLanes for Rows8 {
 /// pixel `lane`).
 pub type MlabSpan<const M: usize> = [[Row; LANES]; M];
 
-/// A Hybrid Transparency span: 8 pixels with `K` head rows (layer-major) and 8 tails.
+/// A Hybrid Transparency span: 8 pixels with `K` head rows (layer-major) and 8 tails of the
+/// arithmetic `A` ([`Unbiased`] by default).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(C)]
-pub struct HybridSpan<const K: usize> {
+pub struct HybridSpan<const K: usize, A: Arithmetic = Unbiased> {
     /// `head[j][lane]` is head row `j` of pixel `lane`.
     pub head: [[Row; LANES]; K],
     /// The tail of each pixel.
-    pub tails: [Tail; LANES],
+    pub tails: [A::Tail; LANES],
 }
 
-impl<const K: usize> HybridSpan<K> {
+impl<const K: usize, A: Arithmetic> HybridSpan<K, A> {
     /// Empty heads and tails.
     pub const fn new() -> Self {
         HybridSpan {
             head: [[Row::EMPTY; LANES]; K],
-            tails: [Tail::EMPTY; LANES],
+            tails: [A::Tail::EMPTY; LANES],
         }
     }
 }
 
-impl<const K: usize> Default for HybridSpan<K> {
+impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
     fn default() -> Self {
         Self::new()
     }
 }
 
-/// Listing 1 on 8 pixels: insert `rows[lane]` into pixel `lane` for every lane whose bit is
-/// set in `mask`. Byte-identical to [`crate::mlab::insert`] on each lane, for any rows.
+/// Listing 1 on 8 pixels in the default arithmetic ([`Unbiased`]): see [`mlab_insert_with`].
 #[inline]
 pub fn mlab_insert<const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
+    mlab_insert_with::<Unbiased, M>(span, rows, mask);
+}
+
+/// Listing 1 on 8 pixels in the arithmetic `A`: insert `rows[lane]` into pixel `lane` for
+/// every lane whose bit is set in `mask`. Byte-identical to
+/// [`crate::mlab::insert_with`]`::<A, M>` on each lane, for any rows.
+#[inline(always)] // a span insert is the inner loop of a rasterizer: never a call
+pub fn mlab_insert_with<A: Arithmetic, const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
     // Full spans (the common case) skip the mask: with a constant all-ones mask the
     // compiler drops the ANDs and the final select.
     if mask == 0xff {
-        crate::mlab::insert_lanes(span, Rows8::load(rows), Mask8::ALL);
+        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::ALL);
     } else {
-        crate::mlab::insert_lanes(span, Rows8::load(rows), Mask8::from_bits(mask));
+        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::from_bits(mask));
     }
 }
 
 /// Listing 2 on 8 pixels. Byte-identical to [`crate::hybrid::insert`] on each lane.
 #[inline]
-pub fn hybrid_insert<const K: usize>(span: &mut HybridSpan<K>, rows: &[Row; LANES], mask: u8) {
+pub fn hybrid_insert<const K: usize, A: Arithmetic>(span: &mut HybridSpan<K, A>, rows: &[Row; LANES], mask: u8) {
     hybrid_insert_parts(&mut span.head, &mut span.tails, rows, mask);
 }
 
 /// [`hybrid_insert`] on a span stored as separate head layers and tails (as in a
-/// [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer)).
+/// [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer)); the tail type picks the layout.
 #[inline]
-pub fn hybrid_insert_parts<const K: usize>(
+pub fn hybrid_insert_parts<T: TailFormat, const K: usize>(
     head: &mut [[Row; LANES]; K],
-    tails: &mut [Tail; LANES],
+    tails: &mut [T; LANES],
     rows: &[Row; LANES],
     mask: u8,
 ) {
     if mask == 0xff {
-        crate::hybrid::insert_lanes(head, tails, Rows8::load(rows), Mask8::ALL);
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::ALL);
     } else {
-        crate::hybrid::insert_lanes(head, tails, Rows8::load(rows), Mask8::from_bits(mask));
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::from_bits(mask));
     }
 }
 
@@ -545,38 +666,54 @@ pub struct QuantizedLanes {
 }
 
 impl FragmentLanes {
-    /// Validate and quantize premultiplied fragments, as [`crate::Fragment::premultiplied`]
-    /// then [`crate::Fragment::row`] would, lane by lane.
+    /// Validate and quantize premultiplied fragments in the default arithmetic
+    /// ([`Unbiased`]): see [`quantize_with`](Self::quantize_with).
     pub fn quantize(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl(mask, false)
+        self.quantize_impl::<Unbiased>(mask, false)
+    }
+
+    /// Validate and quantize premultiplied fragments as [`crate::Fragment::premultiplied`]
+    /// then [`Arithmetic::quantize`] would, lane by lane.
+    pub fn quantize_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl::<A>(mask, false)
+    }
+
+    /// Validate and quantize straight-color fragments in the default arithmetic: see
+    /// [`quantize_straight_with`](Self::quantize_straight_with).
+    pub fn quantize_straight(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl::<Unbiased>(mask, true)
     }
 
     /// Validate and quantize straight-color fragments, as [`crate::Fragment::straight`] then
-    /// [`crate::Fragment::row`] would (`color * alpha`, one f32 multiply).
-    pub fn quantize_straight(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl(mask, true)
+    /// [`Arithmetic::quantize`] would (`color * alpha`, one f32 multiply).
+    pub fn quantize_straight_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl::<A>(mask, true)
     }
 
-    fn quantize_impl(&self, mask: u8, straight: bool) -> QuantizedLanes {
+    fn quantize_impl<A: Arithmetic>(&self, mask: u8, straight: bool) -> QuantizedLanes {
         let zero = f32x8::ZERO;
         let one = f32x8::ONE;
         let alpha = f32x8::new(self.alpha);
         let depth = f32x8::new(self.depth);
         // Every comparison is false for NaN, so NaN anywhere makes the lane invalid.
         let mut ok = alpha.simd_ge(zero) & alpha.simd_le(one) & depth.abs().simd_lt(f32x8::splat(f32::INFINITY));
-        let mut bytes = [u32x8::ZERO; 3];
-        for (c, out) in self.color.iter().zip(bytes.iter_mut()) {
+        let mut pre = [zero; 3];
+        for (c, out) in self.color.iter().zip(pre.iter_mut()) {
             let raw = f32x8::new(*c);
-            let pre = if straight {
+            *out = if straight {
                 ok &= raw.simd_ge(zero) & raw.simd_lt(f32x8::splat(f32::INFINITY));
                 raw * alpha
             } else {
                 raw
             };
-            ok &= pre.simd_ge(zero) & pre.simd_le(one);
-            *out = quantize8(pre);
+            ok &= out.simd_ge(zero) & out.simd_le(one);
         }
-        let t = u32x8::splat(255) - quantize8(alpha);
+        let u = match A::KIND {
+            Kind::Paper => f32x8::splat(0.5),
+            Kind::Unbiased => fragment_dither8(pre, alpha, depth),
+        };
+        let bytes = pre.map(|c| quantize8(c, u));
+        let t = u32x8::splat(255) - quantize8(alpha, u);
         let rgbt: [u32; LANES] = cast(bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24));
         let z: [u32; LANES] = cast(depth);
         let valid = (ok.to_bitmask() as u8) & mask;
@@ -595,27 +732,53 @@ impl FragmentLanes {
     }
 }
 
-/// `floor(v * 255 + 0.5)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`]); other lanes
-/// give unspecified bytes and must be masked.
+/// [`crate::arith::fragment_dither`] for 8 lanes (16-bit mix in the low slot of each dword).
 #[inline(always)]
-fn quantize8(v: f32x8) -> u32x8 {
-    let x = v * f32x8::splat(255.0) + f32x8::splat(0.5);
+fn fragment_dither8(pre: [f32x8; 3], alpha: f32x8, depth: f32x8) -> f32x8 {
+    let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
+    let x = bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth);
+    let s: u16x16 = cast((x ^ (x >> 16)) & u32x8::splat(0xffff));
+    let s: u16x16 = s * K;
+    let h = cast::<u16x16, u32x8>(s >> 8) & u32x8::splat(0xff);
+    (f32x8::from_u(h) + f32x8::splat(0.5)) * f32x8::splat(1.0 / 256.0)
+}
+
+/// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`,
+/// [`crate::arith::quantize_with_dither`] otherwise); other lanes give unspecified bytes
+/// and must be masked.
+#[inline(always)]
+fn quantize8(v: f32x8, u: f32x8) -> u32x8 {
+    let x = v * f32x8::splat(255.0) + u;
     cast::<i32x8, u32x8>(x.fast_trunc_int()) & u32x8::splat(0xff)
 }
 
-/// Validate, quantize and insert (Listing 1) one fragment per lane; returns the lanes that
-/// were on but invalid (left untouched).
+/// Validate, quantize and insert (Listing 1) one fragment per lane in the default
+/// arithmetic; returns the lanes that were on but invalid (left untouched).
 #[inline]
 pub fn mlab_insert_fragments<const M: usize>(span: &mut MlabSpan<M>, fragments: &FragmentLanes, mask: u8) -> u8 {
-    let q = fragments.quantize(mask);
-    mlab_insert(span, &q.rows, q.valid);
+    mlab_insert_fragments_with::<Unbiased, M>(span, fragments, mask)
+}
+
+/// [`mlab_insert_fragments`] in the arithmetic `A`.
+#[inline]
+pub fn mlab_insert_fragments_with<A: Arithmetic, const M: usize>(
+    span: &mut MlabSpan<M>,
+    fragments: &FragmentLanes,
+    mask: u8,
+) -> u8 {
+    let q = fragments.quantize_with::<A>(mask);
+    mlab_insert_with::<A, M>(span, &q.rows, q.valid);
     q.invalid
 }
 
 /// Validate, quantize and insert (Listing 2) one fragment per lane; returns the invalid lanes.
 #[inline]
-pub fn hybrid_insert_fragments<const K: usize>(span: &mut HybridSpan<K>, fragments: &FragmentLanes, mask: u8) -> u8 {
-    let q = fragments.quantize(mask);
+pub fn hybrid_insert_fragments<const K: usize, A: Arithmetic>(
+    span: &mut HybridSpan<K, A>,
+    fragments: &FragmentLanes,
+    mask: u8,
+) -> u8 {
+    let q = fragments.quantize_with::<A>(mask);
     hybrid_insert(span, &q.rows, q.valid);
     q.invalid
 }
@@ -675,20 +838,34 @@ pub fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> ResolvedLanes {
 
 /// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
 #[inline]
-pub fn hybrid_resolve<const K: usize>(span: &HybridSpan<K>) -> ResolvedLanes {
+pub fn hybrid_resolve<const K: usize, A: Arithmetic>(span: &HybridSpan<K, A>) -> ResolvedLanes {
     let (color, t) = hybrid_resolve_regs(&span.head, &span.tails);
     ResolvedLanes::from_lanes(color, t)
 }
 
 /// The HT resolve in registers, pixels in [`POSITION`] order.
 #[inline(always)]
-fn hybrid_resolve_regs<const K: usize>(head: &[[Row; LANES]; K], tails: &[Tail; LANES]) -> ([f32x8; 3], f32x8) {
+fn hybrid_resolve_regs<T: TailFormat, const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+) -> ([f32x8; 3], f32x8) {
     let head = crate::resolve::resolve_layers(head.iter().map(layer_bytes));
     let tails = Rows8::load_tails(tails);
     let (w0, w1) = (words0(tails), words1(tails));
-    let field = u32x8::splat(0x3ff);
-    let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
-    crate::hybrid::resolve_lanes::<f32x8>(head, sums, w1 & u32x8::splat(0xffff), w1 >> 16)
+    let (sums, alpha, count) = match T::KIND {
+        Kind::Paper => {
+            let field = u32x8::splat(0x3ff);
+            let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
+            (sums, w1 & u32x8::splat(0xffff), w1 >> 16)
+        }
+        Kind::Unbiased => {
+            // Colors at bits 0, 13, 26 (the last one across the words), alpha at 39, count at 52.
+            let field = u32x8::splat(0x1fff);
+            let blue = (w0 >> 26) | ((w1 & u32x8::splat(0x7f)) << 6);
+            ([w0 & field, (w0 >> 13) & field, blue], (w1 >> 7) & field, w1 >> 20)
+        }
+    };
+    crate::hybrid::resolve_lanes::<f32x8>(head, sums, alpha, count)
 }
 
 impl ResolvedLanes {
@@ -745,15 +922,18 @@ pub fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Backgr
 
 /// [`hybrid_resolve`] straight to RGBA8.
 #[inline]
-pub fn hybrid_resolve_rgba8<const K: usize>(span: &HybridSpan<K>, background: Background) -> [[u8; 4]; LANES] {
+pub fn hybrid_resolve_rgba8<const K: usize, A: Arithmetic>(
+    span: &HybridSpan<K, A>,
+    background: Background,
+) -> [[u8; 4]; LANES] {
     hybrid_resolve_parts_rgba8(&span.head, &span.tails, background)
 }
 
 /// [`hybrid_resolve_rgba8`] on separate head layers and tails.
 #[inline]
-pub fn hybrid_resolve_parts_rgba8<const K: usize>(
+pub fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
-    tails: &[Tail; LANES],
+    tails: &[T; LANES],
     background: Background,
 ) -> [[u8; 4]; LANES] {
     let (color, t) = hybrid_resolve_regs(head, tails);
@@ -762,7 +942,10 @@ pub fn hybrid_resolve_parts_rgba8<const K: usize>(
 
 /// [`hybrid_resolve`] on separate head layers and tails.
 #[inline]
-pub fn hybrid_resolve_parts<const K: usize>(head: &[[Row; LANES]; K], tails: &[Tail; LANES]) -> ResolvedLanes {
+pub fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+) -> ResolvedLanes {
     let (color, t) = hybrid_resolve_regs(head, tails);
     ResolvedLanes::from_lanes(color, t)
 }

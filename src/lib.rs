@@ -39,6 +39,7 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+pub mod arith;
 pub mod fragment;
 pub mod framebuffer;
 pub mod hybrid;
@@ -49,9 +50,10 @@ pub mod row;
 pub mod spans;
 pub mod unorm;
 
+pub use arith::{Arithmetic, Paper, Unbiased};
 pub use fragment::{Fragment, FragmentError};
 pub use framebuffer::{FramebufferError, HybridFramebuffer, MlabFramebuffer};
-pub use hybrid::{Hybrid, Tail};
+pub use hybrid::{Hybrid, Tail, TailFormat};
 pub use mlab::BlendingArray;
 pub use resolve::{Background, Resolved, resolve_rows, to_rgba8, to_rgba16f};
 pub use row::Row;

@@ -12,20 +12,24 @@
 //!   z = z_front
 //! ```
 //!
-//! Arithmetic: the merge runs in exact unorm8 integers ([`crate::unorm`]): each product is
-//! `round(a * b / 255)`, the color sum saturates at 255. It is deterministic, needs no
-//! floating point, and a shader reproduces it bit for bit. Merging with the empty row is
-//! the identity, so an array that is not full needs no special case.
+//! Arithmetic: the merge runs in exact unorm8 integers, in one of two arithmetics
+//! ([`crate::arith`]): the default [`Unbiased`] rounds each product `floor((a * b + d) / 255)`
+//! with a dither `d` hashed from the two rows (no transmittance stall on faint layers), the
+//! paper's [`Paper`](crate::Paper) rounds to nearest. Both are deterministic, need no
+//! floating point, and a shader reproduces them bit for bit. Merging with the empty row is
+//! the identity in both, so an array that is not full needs no special case.
 //!
 //! Invariants kept by [`insert`] for any stream of valid fragments (finite depth): rows
 //! sorted by depth front to back (non-decreasing `z`), rows at `z = +infinity` are
 //! [`Row::EMPTY`] and only at the back.
 
+use core::marker::PhantomData;
+
+use crate::arith::{Arithmetic, Unbiased};
 use crate::fragment::Fragment;
 use crate::lanes::{RowLanes, Slot};
 use crate::resolve::{Resolved, resolve_rows};
 use crate::row::Row;
-use crate::unorm::mul;
 
 /// Compile-time check that a blending array has at least one row.
 pub(crate) struct AtLeastOne<const M: usize>;
@@ -33,28 +37,46 @@ impl<const M: usize> AtLeastOne<M> {
     pub(crate) const OK: () = assert!(M >= 1, "an MLAB blending array needs at least one row (M >= 1)");
 }
 
-/// Merge two neighbouring rows into one (paper Eq. 7 and 8): `front` is nearer.
-///
-/// `A = A_front + round(A_back * T_front / 255)` per channel, saturating at 255;
-/// `T = round(T_front * T_back / 255)`; `z = z_front`.
+/// Merge two neighbouring rows into one (paper Eq. 7 and 8) in the default arithmetic
+/// ([`Unbiased`]): `front` is nearer; see [`merge_with`].
 ///
 /// ```
 /// use mlab::{Row, mlab::merge};
 /// let front = Row::new([100, 0, 0], 128, 1.0);
-/// let back = Row::new([0, 200, 0], 0, 2.0);
-/// assert_eq!(merge(front, back), Row::new([100, 100, 0], 0, 1.0));
 /// assert_eq!(merge(front, Row::EMPTY), front);
+/// let back = Row::new([0, 200, 0], 0, 2.0);
+/// let m = merge(front, back);
+/// assert_eq!((m.transmittance(), m.depth()), (0, 1.0));
+/// assert!(m.color()[1] == 100 || m.color()[1] == 101); // 200 * 128 / 255 = 100.39
 /// ```
 #[inline(always)]
 pub fn merge(front: Row, back: Row) -> Row {
-    let [ar, ag, ab, at] = front.rgbt();
-    let [br, bg, bb, bt] = back.rgbt();
-    // `min` rather than `u8::saturating_add`: the same value, without a branch.
-    let add = |a: u8, b: u8| (a as u32 + mul(b, at) as u32).min(255) as u8;
-    Row::new([add(ar, br), add(ag, bg), add(ab, bb)], mul(at, bt), front.depth())
+    Unbiased::merge(front, back)
 }
 
-/// Listing 1 on a blending array of `M` rows: insert `row`, then merge the last two rows.
+/// Merge two neighbouring rows (Eq. 7 and 8) in the arithmetic `A`: `front` is nearer,
+/// `A = A_front + A_back * T_front` per channel (saturating at 255), `T = T_front * T_back`,
+/// `z = z_front`, each product rounded as `A` says ([`crate::arith`]).
+///
+/// ```
+/// use mlab::{Paper, Row, mlab::merge_with};
+/// let front = Row::new([100, 0, 0], 128, 1.0);
+/// let back = Row::new([0, 200, 0], 0, 2.0);
+/// assert_eq!(merge_with::<Paper>(front, back), Row::new([100, 100, 0], 0, 1.0));
+/// ```
+#[inline(always)]
+pub fn merge_with<A: Arithmetic>(front: Row, back: Row) -> Row {
+    A::merge(front, back)
+}
+
+/// Listing 1 on a blending array of `M` rows in the default arithmetic: see [`insert_with`].
+#[inline]
+pub fn insert<const M: usize>(rows: &mut [Row; M], row: Row) {
+    insert_with::<Unbiased, M>(rows, row);
+}
+
+/// Listing 1 on a blending array of `M` rows in the arithmetic `A`: insert `row`, then
+/// merge the last two rows.
 ///
 /// The comparison is the paper's `f.z <= B[i].z` in IEEE f32: a new fragment goes in front
 /// of rows at equal depth (so coplanar fragments blend like OVER in submission order), and
@@ -64,15 +86,19 @@ pub fn merge(front: Row, back: Row) -> Row {
 /// the result is deterministic and never panics, but the invariants only hold if they held
 /// before.
 #[inline]
-pub fn insert<const M: usize>(rows: &mut [Row; M], row: Row) {
-    insert_lanes(rows, row, true);
+pub fn insert_with<A: Arithmetic, const M: usize>(rows: &mut [Row; M], row: Row) {
+    insert_lanes::<A, _, _, M>(rows, row, true);
 }
 
 /// Listing 1, written once for every lane width (a [`Row`] is one lane; see
 /// [`crate::lanes`]): lanes where `on` is false are left untouched. The swap of the listing
 /// is two selects on the same condition, so this is the listing step for step, for any rows.
 #[inline(always)]
-pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, const M: usize>(b: &mut [S; M], fragment: L, on: L::Mask) {
+pub(crate) fn insert_lanes<A: Arithmetic, L: RowLanes, S: Slot<L>, const M: usize>(
+    b: &mut [S; M],
+    fragment: L,
+    on: L::Mask,
+) {
     let () = AtLeastOne::<M>::OK;
     let mut f = fragment;
     // 1-pass bubble sort to insert fragment, one layer at a time.
@@ -85,7 +111,7 @@ pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, const M: usize>(b: &mut [S; 
             slot.store(front);
         } else {
             // Compression (merge last two rows): `f` is the row pushed out, B[m] in the listing.
-            slot.store(L::select(on, L::merge(front, f), front));
+            slot.store(L::select(on, L::merge::<A>(front, f), front));
         }
     }
 }
@@ -109,11 +135,12 @@ pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, const M: usize>(b: &mut [S; 
 /// ```
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Debug)]
 #[repr(transparent)]
-pub struct BlendingArray<const M: usize> {
+pub struct BlendingArray<const M: usize, A: Arithmetic = Unbiased> {
     rows: [Row; M],
+    arithmetic: PhantomData<A>,
 }
 
-impl<const M: usize> BlendingArray<M> {
+impl<const M: usize, A: Arithmetic> BlendingArray<M, A> {
     /// Number of rows.
     pub const ROWS: usize = M;
     /// Size in bytes (`8 * M`).
@@ -122,14 +149,20 @@ impl<const M: usize> BlendingArray<M> {
     /// An array of empty rows.
     pub const fn new() -> Self {
         let () = AtLeastOne::<M>::OK;
-        BlendingArray { rows: [Row::EMPTY; M] }
+        BlendingArray {
+            rows: [Row::EMPTY; M],
+            arithmetic: PhantomData,
+        }
     }
 
     /// An array over given rows (for example read back from a GPU buffer). Any rows are
     /// accepted; see [`insert`] for what unsorted rows do.
     pub const fn from_rows(rows: [Row; M]) -> Self {
         let () = AtLeastOne::<M>::OK;
-        BlendingArray { rows }
+        BlendingArray {
+            rows,
+            arithmetic: PhantomData,
+        }
     }
 
     /// The rows, front to back.
@@ -147,16 +180,16 @@ impl<const M: usize> BlendingArray<M> {
         self.rows = [Row::EMPTY; M];
     }
 
-    /// Insert a validated fragment (quantized here, once) with Listing 1.
+    /// Insert a validated fragment (quantized here, once, by `A`) with Listing 1.
     #[inline]
     pub fn insert(&mut self, fragment: &Fragment) {
-        insert(&mut self.rows, fragment.row());
+        insert_with::<A, M>(&mut self.rows, A::quantize(fragment));
     }
 
     /// Insert an already quantized row with Listing 1.
     #[inline]
     pub fn insert_row(&mut self, row: Row) {
-        insert(&mut self.rows, row);
+        insert_with::<A, M>(&mut self.rows, row);
     }
 
     /// Resolve (paper Eq. 5 and 6), see [`resolve_rows`].
@@ -166,7 +199,7 @@ impl<const M: usize> BlendingArray<M> {
     }
 }
 
-impl<const M: usize> Default for BlendingArray<M> {
+impl<const M: usize, A: Arithmetic> Default for BlendingArray<M, A> {
     fn default() -> Self {
         Self::new()
     }

@@ -27,14 +27,14 @@
 //! let (w, h) = (13, 2); // not a multiple of 8: two spans per line, the second partial
 //! let mut storage = vec![Row::EMPTY; SpanFramebuffer::<4>::rows_needed(w, h)?];
 //! let mut fb = SpanFramebuffer::<4>::new_cleared(&mut storage, w, h)?;
-//! let frags = FragmentLanes { color: [[0.5; 8], [0.0; 8], [0.0; 8]], alpha: [0.5; 8], depth: [1.0; 8] };
+//! let frags = FragmentLanes { color: [[0.4; 8], [0.0; 8], [0.0; 8]], alpha: [0.6; 8], depth: [1.0; 8] };
 //! // Pixels 9..13 of line 1: the partial span at the right edge (lanes 0..4 on).
 //! let invalid = fb.insert_span_fragments(9, 1, &frags, 0b0000_1111)?;
 //! assert_eq!(invalid, 0);
 //! assert!(fb.insert_span_fragments(9, 1, &frags, 0b0001_1111).is_err()); // lane 4 is x = 13
 //! let mut out = vec![[0u8; 4]; (w * h) as usize];
 //! fb.resolve_rgba8(&mut out, Background::Opaque(mlab::glam::Vec3::ZERO))?;
-//! assert_eq!(out[13 + 9], [128, 0, 0, 255]);
+//! assert_eq!(out[13 + 9], [102, 0, 0, 255]);
 //! assert_eq!(out[13 + 8], [0, 0, 0, 255]);
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
@@ -42,8 +42,11 @@
 use glam::Vec4;
 use half::f16;
 
+use core::marker::PhantomData;
+
+use crate::arith::{Arithmetic, Unbiased};
 use crate::framebuffer::{Dims, FramebufferError};
-use crate::hybrid::Tail;
+use crate::hybrid::TailFormat;
 use crate::lanes::{self, FragmentLanes, LANES, MlabSpan};
 use crate::resolve::{Background, Resolved, to_rgba8, to_rgba16f};
 use crate::row::Row;
@@ -189,7 +192,7 @@ macro_rules! span_inserts {
             mask: u8,
         ) -> Result<u8, FramebufferError> {
             self.dims.split(x, y, mask)?;
-            let q = fragments.quantize(mask);
+            let q = fragments.quantize_with::<A>(mask);
             self.insert_span(x, y, &q.rows, q.valid)?;
             Ok(q.invalid)
         }
@@ -202,20 +205,21 @@ macro_rules! span_inserts {
 
         /// Insert one fragment at `(x, y)`.
         pub fn insert(&mut self, x: u32, y: u32, fragment: &crate::Fragment) -> Result<(), FramebufferError> {
-            self.insert_row(x, y, fragment.row())
+            self.insert_row(x, y, A::quantize(fragment))
         }
     };
 }
 
 /// An MLAB framebuffer in 8-pixel layer-major spans over borrowed storage (see the
-/// [module docs](self) for the arrangement).
+/// [module docs](self) for the arrangement), in the arithmetic `A` ([`Unbiased`] by default).
 #[derive(Debug)]
-pub struct SpanFramebuffer<'a, const M: usize> {
+pub struct SpanFramebuffer<'a, const M: usize, A: Arithmetic = Unbiased> {
     spans: &'a mut [MlabSpan<M>],
     dims: SpanDims,
+    arithmetic: PhantomData<A>,
 }
 
-impl<'a, const M: usize> SpanFramebuffer<'a, M> {
+impl<'a, const M: usize, A: Arithmetic> SpanFramebuffer<'a, M, A> {
     /// Rows of storage for `width x height` pixels: `ceil(width / 8) * 8 * height * M`.
     pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
         SpanDims::new(width, height).rows_needed(M)
@@ -238,7 +242,11 @@ impl<'a, const M: usize> SpanFramebuffer<'a, M> {
             expected,
             actual: expected,
         })?;
-        Ok(SpanFramebuffer { spans, dims })
+        Ok(SpanFramebuffer {
+            spans,
+            dims,
+            arithmetic: PhantomData,
+        })
     }
 
     span_common!();
@@ -257,12 +265,12 @@ impl<'a, const M: usize> SpanFramebuffer<'a, M> {
         if m0 != 0
             && let Some(s) = self.spans.get_mut(span)
         {
-            lanes::mlab_insert(s, &rows, m0);
+            lanes::mlab_insert_with::<A, M>(s, &rows, m0);
         }
         if m1 != 0
             && let Some(s) = self.spans.get_mut(span + 1)
         {
-            lanes::mlab_insert(s, &rows, m1);
+            lanes::mlab_insert_with::<A, M>(s, &rows, m1);
         }
         Ok(())
     }
@@ -361,7 +369,7 @@ impl<'a, const M: usize> SpanFramebuffer<'a, M> {
     /// assert_eq!(fb.pixel(19, 8)?[0], Row::new([9, 9, 9], 0, 1.0));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
-    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = SpanFramebuffer<'_, M>> {
+    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = SpanFramebuffer<'_, M, A>> {
         let d = self.dims;
         let chunk = (d.spans * lines as usize).max(1);
         let n = if lines == 0 || d.spans == 0 { 0 } else { usize::MAX };
@@ -370,6 +378,7 @@ impl<'a, const M: usize> SpanFramebuffer<'a, M> {
             SpanFramebuffer {
                 spans,
                 dims: SpanDims { height, ..d },
+                arithmetic: PhantomData,
             }
         })
     }
@@ -404,15 +413,21 @@ fn pixel_major_slice<const M: usize>(
     bytemuck::try_cast_slice_mut(out).map_err(|_| FramebufferError::StorageLength { expected, actual })
 }
 
+/// Head layers and tails of one stored HT span.
+type SpanParts<'s, const K: usize, T> = (&'s [[Row; LANES]; K], &'s [T; LANES]);
+/// Head layers and tails of one stored HT span, mutable.
+type SpanPartsMut<'s, const K: usize, T> = (&'s mut [[Row; LANES]; K], &'s mut [T; LANES]);
+
 /// A Hybrid Transparency framebuffer in 8-pixel spans: per span, `K` head layers of 8 rows,
 /// then the 8 tails in 8 row-sized slots (see the [module docs](self)).
 #[derive(Debug)]
-pub struct HybridSpanFramebuffer<'a, const K: usize> {
+pub struct HybridSpanFramebuffer<'a, const K: usize, A: Arithmetic = Unbiased> {
     rows: &'a mut [Row],
     dims: SpanDims,
+    arithmetic: PhantomData<A>,
 }
 
-impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
+impl<'a, const K: usize, A: Arithmetic> HybridSpanFramebuffer<'a, K, A> {
     const SPAN_ROWS: usize = (K + 1) * LANES;
 
     /// Rows of storage: `ceil(width / 8) * 8 * height * (K + 1)`.
@@ -432,14 +447,18 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
                 actual: storage.len(),
             });
         }
-        Ok(HybridSpanFramebuffer { rows: storage, dims })
+        Ok(HybridSpanFramebuffer {
+            rows: storage,
+            dims,
+            arithmetic: PhantomData,
+        })
     }
 
     span_common!();
 
     /// Empty head rows and empty tails everywhere.
     pub fn clear(&mut self) {
-        let empty_tail = Row::from_bytes(Tail::EMPTY.to_bytes());
+        let empty_tail = Row::from_bytes(A::Tail::EMPTY.to_bytes());
         for span in self.rows.chunks_exact_mut(Self::SPAN_ROWS) {
             let (head, tails) = span.split_at_mut(K * LANES);
             head.fill(Row::EMPTY);
@@ -448,7 +467,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
     }
 
     /// Head layers and tails of stored span `i`.
-    fn parts_mut(&mut self, i: usize) -> Option<(&mut [[Row; LANES]; K], &mut [Tail; LANES])> {
+    fn parts_mut(&mut self, i: usize) -> Option<SpanPartsMut<'_, K, A::Tail>> {
         let span = self.rows.get_mut(i * Self::SPAN_ROWS..(i + 1) * Self::SPAN_ROWS)?;
         let (head, tails) = span.split_at_mut(K * LANES);
         let head: &mut [[Row; LANES]] = bytemuck::try_cast_slice_mut(head).ok()?;
@@ -456,7 +475,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
         Some((head.try_into().ok()?, bytemuck::cast_mut(tails)))
     }
 
-    fn parts(span: &[Row]) -> Option<(&[[Row; LANES]; K], &[Tail; LANES])> {
+    fn parts(span: &[Row]) -> Option<SpanParts<'_, K, A::Tail>> {
         let (head, tails) = span.split_at_checked(K * LANES)?;
         let head: &[[Row; LANES]] = bytemuck::try_cast_slice(head).ok()?;
         let tails: &[Row; LANES] = tails.try_into().ok()?;
@@ -481,7 +500,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
     span_inserts!();
 
     /// Head rows and tail of pixel `(x, y)`.
-    pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], Tail), FramebufferError> {
+    pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], A::Tail), FramebufferError> {
         let (span, lane) = self.dims.locate(x, y)?;
         let (head, tails) = self.span(span).ok_or(self.dims.out_of_bounds(x, y))?;
         Ok((core::array::from_fn(|j| head[j][lane]), tails[lane]))
@@ -492,7 +511,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
         self.pixel(x, y).map(|(h, t)| crate::hybrid::resolve(&h, t))
     }
 
-    fn span(&self, i: usize) -> Option<(&[[Row; LANES]; K], &[Tail; LANES])> {
+    fn span(&self, i: usize) -> Option<SpanParts<'_, K, A::Tail>> {
         self.rows
             .get(i * Self::SPAN_ROWS..(i + 1) * Self::SPAN_ROWS)
             .and_then(Self::parts)
@@ -525,7 +544,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
     }
 
     /// Split into bands of `lines` lines, each a framebuffer over its part of the storage.
-    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = HybridSpanFramebuffer<'_, K>> {
+    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = HybridSpanFramebuffer<'_, K, A>> {
         let d = self.dims;
         let chunk = (d.spans * lines as usize * Self::SPAN_ROWS).max(1);
         let n = if lines == 0 || d.spans == 0 { 0 } else { usize::MAX };
@@ -534,6 +553,7 @@ impl<'a, const K: usize> HybridSpanFramebuffer<'a, K> {
             HybridSpanFramebuffer {
                 rows,
                 dims: SpanDims { height, ..d },
+                arithmetic: PhantomData,
             }
         })
     }

@@ -33,6 +33,16 @@ pub const fn mul(a: u8, b: u8) -> u8 {
     div255(a as u32 * b as u32) as u8
 }
 
+/// `floor(y / 255)` for `y` in `0..=65279` (a product of two bytes plus a dither of at most
+/// 254): `((y + 1) * 257) >> 16`, one add and one high multiply in 16-bit lanes.
+///
+/// Exact on that range (`y = 255 q + r` gives `(y + 1) * 257 = 65536 q + 257 (r + 1) - q`
+/// with `0 < 257 (r + 1) - q < 65536` for `q <= 255`); `div255_floor_is_exact` checks every value.
+#[inline(always)]
+pub const fn div255_floor(y: u32) -> u32 {
+    ((y + 1) * 257) >> 16
+}
+
 /// Quantize `v` in `[0, 1]` to a byte: `floor(v * 255 + 0.5)` in f32 (round half up).
 ///
 /// The multiply and the add are two separately rounded f32 operations (Rust never
@@ -53,6 +63,13 @@ mod tests {
             // round(x / 255) with ties up, in exact integer arithmetic.
             let expected = (2 * x + 255) / 510;
             assert_eq!(div255(x), expected, "x = {x}");
+        }
+    }
+
+    #[test]
+    fn div255_floor_is_exact() {
+        for y in 0..=255u32 * 255 + 254 {
+            assert_eq!(div255_floor(y), y / 255, "y = {y}");
         }
     }
 

@@ -2,7 +2,9 @@
 //! coordinates and change nothing when they do.
 
 use mlab::glam::{Vec3, Vec4};
-use mlab::{Background, Fragment, FragmentError as E, FramebufferError, HybridFramebuffer, MlabFramebuffer, Row};
+use mlab::{
+    Arithmetic, Background, Fragment, FragmentError as E, FramebufferError, HybridFramebuffer, MlabFramebuffer, Row,
+};
 
 #[test]
 fn every_bad_fragment_class_is_rejected() {
@@ -126,16 +128,22 @@ fn framebuffers_insert_resolve_and_expose_bytes() {
     fb.clear();
     let f = Fragment::straight(Vec3::new(0.0, 1.0, 0.0), 0.5, 2.0).unwrap();
     fb.insert(1, 0, &f).unwrap();
-    assert_eq!(fb.pixel(1, 0).unwrap()[0], f.row());
+    // The default arithmetic quantizes with its dither: 127.5 becomes 127 or 128.
+    let row = mlab::Unbiased::quantize(&f);
+    let [_, g, _, t] = row.rgbt();
+    assert!(g == 127 || g == 128);
+    assert_eq!(g, 255 - t, "color and alpha share the dither");
+    assert_eq!(fb.pixel(1, 0).unwrap()[0], row);
     assert_eq!(fb.as_bytes().len(), 64);
-    assert_eq!(&fb.as_bytes()[16..24], &f.row().to_bytes());
+    assert_eq!(&fb.as_bytes()[16..24], &row.to_bytes());
     assert_eq!(
         fb.as_words()[4],
-        u32::from_le_bytes(f.row().to_bytes()[..4].try_into().unwrap())
+        u32::from_le_bytes(row.to_bytes()[..4].try_into().unwrap())
     );
     let mut out = vec![Vec4::ZERO; 4];
     fb.resolve_into(&mut out, Background::Transparent).unwrap();
-    assert_eq!(out[1], Vec4::new(0.0, 128.0 / 255.0, 0.0, 1.0 - 127.0 / 255.0));
+    let inv = mlab::resolve::INV255;
+    assert_eq!(out[1], Vec4::new(0.0, g as f32 * inv, 0.0, 1.0 - t as f32 * inv));
     assert_eq!(out[0], Vec4::ZERO);
     let mut half = vec![[mlab::half::f16::ZERO; 4]; 4];
     fb.resolve_rgba16f(&mut half, Background::Opaque(Vec3::ONE)).unwrap();
@@ -147,10 +155,10 @@ fn framebuffers_insert_resolve_and_expose_bytes() {
     hb.insert(0, 1, &f).unwrap();
     hb.insert(0, 1, &f).unwrap();
     let (head, tail) = hb.pixel(0, 1).unwrap();
-    assert_eq!(head, [f.row()]);
+    assert_eq!(head, [row]);
     assert_eq!(
         (tail.count(), tail.alpha_sum(), tail.color_sum()),
-        (1, 128, [0, 128, 0])
+        (1, 255 - t as u32, [0, g as u32, 0])
     );
     // The tail lives in the pixel's last row-sized slot.
     assert_eq!(&hb.as_bytes()[(2 * 2 + 1) * 8..(2 * 2 + 2) * 8], &tail.to_bytes());

@@ -1,5 +1,6 @@
 //! Lanes against the scalar kernel: byte for byte, for any stream (valid fragments, arbitrary
-//! rows read from bytes, masks), M in {1, 2, 3, 4, 8} and K in {1, 3, 7}. No tolerances.
+//! rows read from bytes, masks), M in {1, 2, 3, 4, 8} and K in {1, 3, 7}, in both
+//! arithmetics (Paper and Unbiased). No tolerances.
 //!
 //! Set `MLAB_EXPECT_BACKEND=avx2` (or `sse2`) to make `backend_is_the_expected_one` fail
 //! when the build did not pick that backend (CI does, for both targets).
@@ -10,7 +11,10 @@ mod common;
 
 use mlab::glam::Vec3;
 use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES};
-use mlab::{Background, Fragment, Row, Tail, hybrid, mlab as listing1, resolve_rows, to_rgba8};
+use mlab::{
+    Arithmetic, Background, Fragment, Paper, Row, TailFormat, Unbiased, hybrid, mlab as listing1, resolve_rows,
+    to_rgba8,
+};
 use proptest::prelude::*;
 
 #[test]
@@ -63,21 +67,25 @@ fn check_resolved(got: &lanes::ResolvedLanes, want: &[mlab::Resolved; LANES]) ->
 
 /// Run a stream through the MLAB lanes and through the scalar kernel per lane; compare
 /// every byte after every step, then the resolve.
-fn check_mlab<const M: usize>(initial: &[[Row; M]; LANES], stream: &[Step]) -> Result<(), TestCaseError> {
+fn check_mlab<A: Arithmetic, const M: usize>(
+    initial: &[[Row; M]; LANES],
+    stream: &[Step],
+) -> Result<(), TestCaseError> {
     let mut span = lanes::from_pixel_major(initial);
     prop_assert_eq!(&lanes::to_pixel_major(&span), initial, "lossless conversion");
     let mut pixels = *initial;
     for (rows, mask) in stream {
-        lanes::mlab_insert(&mut span, rows, *mask);
+        lanes::mlab_insert_with::<A, M>(&mut span, rows, *mask);
         for lane in 0..LANES {
             if mask & (1 << lane) != 0 {
-                listing1::insert(&mut pixels[lane], rows[lane]);
+                listing1::insert_with::<A, M>(&mut pixels[lane], rows[lane]);
             }
         }
         prop_assert_eq!(
             &lanes::to_pixel_major(&span),
             &pixels,
-            "M={} after mask {:08b}",
+            "{} M={} after mask {:08b}",
+            A::NAME,
             M,
             mask
         );
@@ -94,7 +102,10 @@ fn check_mlab<const M: usize>(initial: &[[Row; M]; LANES], stream: &[Step]) -> R
     check_resolved(&lanes::mlab_resolve(&span), &want)
 }
 
-fn check_hybrid<const K: usize>(initial: &HybridSpan<K>, stream: &[Step]) -> Result<(), TestCaseError> {
+fn check_hybrid<const K: usize, A: Arithmetic>(
+    initial: &HybridSpan<K, A>,
+    stream: &[Step],
+) -> Result<(), TestCaseError> {
     let mut span = *initial;
     let mut heads: [[Row; K]; LANES] = core::array::from_fn(|l| core::array::from_fn(|j| initial.head[j][l]));
     let mut tails = initial.tails;
@@ -107,10 +118,18 @@ fn check_hybrid<const K: usize>(initial: &HybridSpan<K>, stream: &[Step]) -> Res
         }
         for lane in 0..LANES {
             for j in 0..K {
-                prop_assert_eq!(span.head[j][lane], heads[lane][j], "K={} head {} lane {}", K, j, lane);
+                prop_assert_eq!(
+                    span.head[j][lane],
+                    heads[lane][j],
+                    "{} K={} head {} lane {}",
+                    A::NAME,
+                    K,
+                    j,
+                    lane
+                );
             }
         }
-        prop_assert_eq!(span.tails, tails, "K={} tails", K);
+        prop_assert_eq!(span.tails, tails, "{} K={} tails", A::NAME, K);
     }
     let want: [mlab::Resolved; LANES] = core::array::from_fn(|l| hybrid::resolve(&heads[l], tails[l]));
     for bg in BACKGROUNDS {
@@ -125,28 +144,33 @@ fn check_hybrid<const K: usize>(initial: &HybridSpan<K>, stream: &[Step]) -> Res
 }
 
 fn check_all(stream: &[Step], garbage: &[u64]) -> Result<(), TestCaseError> {
+    check_arithmetic::<Paper>(stream, garbage)?;
+    check_arithmetic::<Unbiased>(stream, garbage)
+}
+
+fn check_arithmetic<A: Arithmetic>(stream: &[Step], garbage: &[u64]) -> Result<(), TestCaseError> {
     // From empty arrays.
-    check_mlab::<1>(&[[Row::EMPTY; 1]; LANES], stream)?;
-    check_mlab::<2>(&[[Row::EMPTY; 2]; LANES], stream)?;
-    check_mlab::<3>(&[[Row::EMPTY; 3]; LANES], stream)?;
-    check_mlab::<4>(&[[Row::EMPTY; 4]; LANES], stream)?;
-    check_mlab::<8>(&[[Row::EMPTY; 8]; LANES], stream)?;
-    check_hybrid::<1>(&HybridSpan::new(), stream)?;
-    check_hybrid::<3>(&HybridSpan::new(), stream)?;
-    check_hybrid::<7>(&HybridSpan::new(), stream)?;
+    check_mlab::<A, 1>(&[[Row::EMPTY; 1]; LANES], stream)?;
+    check_mlab::<A, 2>(&[[Row::EMPTY; 2]; LANES], stream)?;
+    check_mlab::<A, 3>(&[[Row::EMPTY; 3]; LANES], stream)?;
+    check_mlab::<A, 4>(&[[Row::EMPTY; 4]; LANES], stream)?;
+    check_mlab::<A, 8>(&[[Row::EMPTY; 8]; LANES], stream)?;
+    check_hybrid::<1, A>(&HybridSpan::new(), stream)?;
+    check_hybrid::<3, A>(&HybridSpan::new(), stream)?;
+    check_hybrid::<7, A>(&HybridSpan::new(), stream)?;
     // From arbitrary bytes (as read back from a GPU buffer).
     let row = |i: usize| Row::from_bytes(garbage[i % garbage.len()].wrapping_mul(i as u64 + 1).to_le_bytes());
-    let tail = |i: usize| Tail::from_bytes(garbage[(i + 7) % garbage.len()].rotate_left(i as u32).to_le_bytes());
+    let tail = |i: usize| A::Tail::from_bytes(garbage[(i + 7) % garbage.len()].rotate_left(i as u32).to_le_bytes());
     if !garbage.is_empty() {
-        check_mlab::<4>(
+        check_mlab::<A, 4>(
             &core::array::from_fn(|l| core::array::from_fn(|j| row(l * 4 + j))),
             stream,
         )?;
-        check_mlab::<1>(&core::array::from_fn(|l| [row(l)]), stream)?;
-        let mut h = HybridSpan::<3>::new();
+        check_mlab::<A, 1>(&core::array::from_fn(|l| [row(l)]), stream)?;
+        let mut h = HybridSpan::<3, A>::new();
         h.head = core::array::from_fn(|j| core::array::from_fn(|l| row(100 + j * 8 + l)));
         h.tails = core::array::from_fn(tail);
-        check_hybrid::<3>(&h, stream)?;
+        check_hybrid::<3, A>(&h, stream)?;
     }
     Ok(())
 }
@@ -186,8 +210,13 @@ proptest! {
             alpha: raw.map(|r| r.1),
             depth: raw.map(|r| r.2),
         };
-        for straight in [false, true] {
-            let q = if straight { frags.quantize_straight(mask) } else { frags.quantize(mask) };
+        for (straight, unbiased) in [(false, false), (true, false), (false, true), (true, true)] {
+            let q = match (straight, unbiased) {
+                (false, false) => frags.quantize_with::<Paper>(mask),
+                (true, false) => frags.quantize_straight_with::<Paper>(mask),
+                (false, true) => frags.quantize(mask),
+                (true, true) => frags.quantize_straight(mask),
+            };
             prop_assert_eq!(q.valid & q.invalid, 0);
             prop_assert_eq!(q.valid | q.invalid, mask);
             for lane in 0..LANES {
@@ -201,7 +230,8 @@ proptest! {
                 match scalar {
                     Ok(f) if on => {
                         prop_assert!(q.valid & (1 << lane) != 0, "lane {} should be valid", lane);
-                        prop_assert_eq!(q.rows[lane], f.row());
+                        let want = if unbiased { Unbiased::quantize(&f) } else { f.row() };
+                        prop_assert_eq!(q.rows[lane], want);
                     }
                     Err(_) if on => prop_assert!(q.invalid & (1 << lane) != 0, "lane {} should be invalid", lane),
                     _ => prop_assert_eq!(q.rows[lane], Row::EMPTY),

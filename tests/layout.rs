@@ -1,6 +1,7 @@
 //! 9. Layout: rows and tails pinned to literal bytes; size and alignment asserted.
 
-use mlab::{Hybrid, Row, Tail};
+use mlab::hybrid::PaperTail;
+use mlab::{Hybrid, Paper, Row, Tail};
 
 #[test]
 fn row_layout_is_pinned() {
@@ -23,21 +24,47 @@ fn row_layout_is_pinned() {
 }
 
 #[test]
-fn tail_layout_is_pinned() {
-    assert_eq!(core::mem::size_of::<Tail>(), 8);
-    assert_eq!(core::mem::align_of::<Tail>(), 8);
-    let t = Tail::from_sums([1023, 0x155, 1], 0xbeef, 0x1234);
+fn paper_tail_layout_is_pinned() {
+    assert_eq!(core::mem::size_of::<PaperTail>(), 8);
+    assert_eq!(core::mem::align_of::<PaperTail>(), 8);
+    let t = PaperTail::from_sums([1023, 0x155, 1], 0xbeef, 0x1234);
     // word0 = R | G << 10 | B << 20, word1 = alpha | count << 16, little-endian.
     assert_eq!(t.words(), [1023 | 0x155 << 10 | 1 << 20, 0x1234_beef]);
     assert_eq!(t.to_bytes(), [0xff, 0x57, 0x15, 0x00, 0xef, 0xbe, 0x34, 0x12]);
     assert_eq!(bytemuck::bytes_of(&t), &t.to_bytes());
-    assert_eq!(Tail::EMPTY.to_bytes(), [0; 8]);
-    assert_eq!(Tail::from_bytes(t.to_bytes()), t);
+    assert_eq!(PaperTail::EMPTY.to_bytes(), [0; 8]);
+    assert_eq!(PaperTail::from_bytes(t.to_bytes()), t);
     // Fields saturate at construction.
     assert_eq!(
-        Tail::from_sums([5000, 0, 0], 1 << 20, 1 << 20).words(),
+        PaperTail::from_sums([5000, 0, 0], 1 << 20, 1 << 20).words(),
         [1023, 0xffff_ffff]
     );
+}
+
+#[test]
+fn tail_layout_is_pinned() {
+    assert_eq!(core::mem::size_of::<Tail>(), 8);
+    assert_eq!(core::mem::align_of::<Tail>(), 8);
+    // R = 0x1abc, G = 0x0155, B = 0x1001, alpha = 0x0fed, count = 0x987 as one LE u64:
+    // R | G << 13 | B << 26 | alpha << 39 | count << 52.
+    let t = Tail::from_sums([0x1abc, 0x155, 0x1001], 0xfed, 0x987);
+    assert_eq!(t.to_le_u64(), 0x9877_f6c0_042a_babc);
+    assert_eq!(t.to_bytes(), [0xbc, 0xba, 0x2a, 0x04, 0xc0, 0xf6, 0x77, 0x98]);
+    assert_eq!(t.words(), [0x042a_babc, 0x9877_f6c0]);
+    assert_eq!(bytemuck::bytes_of(&t), &t.to_bytes());
+    assert_eq!(Tail::EMPTY.to_bytes(), [0; 8]);
+    assert_eq!(Tail::from_bytes(t.to_bytes()), t);
+    assert_eq!(
+        (t.color_sum(), t.alpha_sum(), t.count()),
+        ([0x1abc, 0x155, 0x1001], 0xfed, 0x987)
+    );
+    // Fields saturate at construction: 13-bit sums, 12-bit count.
+    assert_eq!(
+        Tail::from_sums([9000, 0, 0], 1 << 20, 1 << 20).to_le_u64(),
+        0x1fff | 0x1fff << 39 | 0xfff << 52
+    );
+    assert!(Tail::from_sums([0, 0, 8191], 0, 1).saturated());
+    assert!(!Tail::from_sums([8190; 3], 8190, 4094).saturated());
 }
 
 #[test]
@@ -46,5 +73,6 @@ fn array_sizes() {
     assert_eq!(mlab::BlendingArray::<4>::BYTES, 32);
     assert_eq!(core::mem::size_of::<Hybrid<3>>(), 32);
     assert_eq!(Hybrid::<3>::BYTES, 32);
+    assert_eq!(core::mem::size_of::<Hybrid<3, Paper>>(), 32);
     assert_eq!(core::mem::size_of::<[Row; 8]>(), 64);
 }

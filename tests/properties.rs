@@ -1,6 +1,8 @@
 //! Properties that pin the paper's claims (issue: kernel, section 8).
 //!
-//! Quantization bounds used below (DELTA = 0.5/255 + 1e-6, n fragments, per channel):
+//! Every property runs in both arithmetics. Quantization bounds used below (DELTA =
+//! 0.5/255 + 1e-6 for the paper's rounding, 1/255 + 1e-6 for the unbiased one: see
+//! `common::delta`; n fragments, per channel):
 //! - M >= n: `DELTA * sum_j (1 + C_behind_j)` (see `common::oracle_with_bound`), at most
 //!   `2 n DELTA` for normal fragments over a background in [0, 1].
 //! - M = 1, stream sorted front to back or back to front: `4 n DELTA`. Each step adds at
@@ -14,7 +16,7 @@ mod common;
 
 use common::*;
 use mlab::glam::Vec3;
-use mlab::{BlendingArray, Fragment, Hybrid, Row, mlab as listing1};
+use mlab::{Arithmetic, BlendingArray, Fragment, Hybrid, Paper, Row, TailFormat, Unbiased, mlab as listing1};
 use proptest::prelude::*;
 
 const BG: [f64; 3] = [0.25, 0.5, 1.0];
@@ -23,16 +25,16 @@ fn bg() -> Vec3 {
     Vec3::new(BG[0] as f32, BG[1] as f32, BG[2] as f32)
 }
 
-fn run_mlab<const M: usize>(stream: &[Fragment]) -> BlendingArray<M> {
-    let mut b = BlendingArray::<M>::new();
+fn run_mlab<const M: usize, A: Arithmetic>(stream: &[Fragment]) -> BlendingArray<M, A> {
+    let mut b = BlendingArray::<M, A>::new();
     for f in stream {
         b.insert(f);
     }
     b
 }
 
-fn run_hybrid<const K: usize>(stream: &[Fragment]) -> Hybrid<K> {
-    let mut h = Hybrid::<K>::new();
+fn run_hybrid<const K: usize, A: Arithmetic>(stream: &[Fragment]) -> Hybrid<K, A> {
+    let mut h = Hybrid::<K, A>::new();
     for f in stream {
         h.insert(f);
     }
@@ -44,14 +46,141 @@ fn pixel(c: Vec3) -> [f64; 3] {
 }
 
 /// Property 1 for one M: streams of at most M fragments match the oracle within the bound.
-fn mlab_fits_matches_oracle<const M: usize>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+fn mlab_fits_matches_oracle<const M: usize, A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
     prop_assume!(stream.len() <= M);
-    let got = pixel(run_mlab::<M>(stream).resolve().over(bg()));
-    let (want, _, bound) = oracle_with_bound(stream, BG);
+    let got = pixel(run_mlab::<M, A>(stream).resolve().over(bg()));
+    let (want, _, bound) = oracle_with_bound_delta(stream, BG, delta::<A>());
     for ch in 0..3 {
         prop_assert!(
             (got[ch] - want[ch]).abs() <= bound[ch],
-            "M={M} channel {ch}: got {got:?} want {want:?} bound {bound:?}"
+            "{} M={M} channel {ch}: got {got:?} want {want:?} bound {bound:?}",
+            A::NAME
+        );
+    }
+    Ok(())
+}
+
+fn p1<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+    mlab_fits_matches_oracle::<1, A>(&stream[..stream.len().min(1)])?;
+    mlab_fits_matches_oracle::<2, A>(&stream[..stream.len().min(2)])?;
+    mlab_fits_matches_oracle::<4, A>(&stream[..stream.len().min(4)])?;
+    mlab_fits_matches_oracle::<8, A>(stream)
+}
+
+fn p1_hybrid<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+    let h = run_hybrid::<7, A>(stream);
+    prop_assert_eq!(h.tail().count(), 0);
+    let got = pixel(h.resolve().over(bg()));
+    let (want, _, bound) = oracle_with_bound_delta(stream, BG, delta::<A>());
+    for ch in 0..3 {
+        prop_assert!((got[ch] - want[ch]).abs() <= bound[ch], "{}", A::NAME);
+    }
+    Ok(())
+}
+
+fn p2<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+    let got = pixel(run_mlab::<1, A>(stream).resolve().over(bg()));
+    let (want, _) = oracle(stream, BG);
+    let bound = 4.0 * stream.len() as f64 * delta::<A>();
+    prop_assert!(
+        max_diff(got, want) <= bound,
+        "{}: got {:?} want {:?} bound {}",
+        A::NAME,
+        got,
+        want,
+        bound
+    );
+    Ok(())
+}
+
+fn p3<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+    let nearest = A::quantize(&stream[oracle_order(stream)[0]]);
+    let want = [nearest.color()[0], nearest.color()[1], nearest.color()[2], 255];
+    let px = |r: mlab::Resolved| mlab::to_rgba8(r.over(bg()).extend(1.0));
+    prop_assert_eq!(px(run_mlab::<1, A>(stream).resolve()), want);
+    prop_assert_eq!(px(run_mlab::<2, A>(stream).resolve()), want);
+    prop_assert_eq!(px(run_mlab::<3, A>(stream).resolve()), want);
+    prop_assert_eq!(px(run_mlab::<4, A>(stream).resolve()), want);
+    prop_assert_eq!(px(run_mlab::<8, A>(stream).resolve()), want);
+    prop_assert_eq!(px(run_hybrid::<1, A>(stream).resolve()), want);
+    prop_assert_eq!(px(run_hybrid::<3, A>(stream).resolve()), want);
+    Ok(())
+}
+
+/// Background visibility across orders: each merge rounds one product, moving the
+/// visibility by less than `delta` (up to f32 slack), so two orders differ by at most
+/// `2 n delta`, and each stays within `n delta` of the product of the quantized
+/// transmittances.
+fn p4<A: Arithmetic>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), TestCaseError> {
+    let half = stream.len() as f64 * (delta::<A>() - 1e-6) + 1e-5;
+    let v = |s: &[Fragment], m: usize| -> f64 {
+        (match m {
+            1 => visibility_bytes_product(run_mlab::<1, A>(s).rows()),
+            _ => visibility_bytes_product(run_mlab::<4, A>(s).rows()),
+        }) as f64
+    };
+    for m in [1, 4] {
+        let (v1, v2) = (v(stream, m), v(shuffled, m));
+        prop_assert!((v1 - v2).abs() <= 2.0 * half, "{} M={}: {} vs {}", A::NAME, m, v1, v2);
+    }
+    let exact: f64 = stream
+        .iter()
+        .map(|f| A::quantize(f).transmittance() as f64 / 255.0)
+        .product();
+    prop_assert!((v(stream, 4) - exact).abs() <= half, "{}", A::NAME);
+    Ok(())
+}
+
+fn p5<A: Arithmetic>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), TestCaseError> {
+    prop_assert_eq!(run_hybrid::<1, A>(stream), run_hybrid::<1, A>(shuffled));
+    prop_assert_eq!(run_hybrid::<3, A>(stream), run_hybrid::<3, A>(shuffled));
+    prop_assert_eq!(run_hybrid::<7, A>(stream), run_hybrid::<7, A>(shuffled));
+    let (a, b) = (
+        run_hybrid::<3, A>(stream).resolve(),
+        run_hybrid::<3, A>(shuffled).resolve(),
+    );
+    prop_assert_eq!(a.transmittance.to_bits(), b.transmittance.to_bits());
+    prop_assert_eq!(
+        a.color.to_array().map(f32::to_bits),
+        b.color.to_array().map(f32::to_bits)
+    );
+    Ok(())
+}
+
+fn p6<A: Arithmetic>(stream: &[Fragment], additive: &[Fragment]) -> Result<(), TestCaseError> {
+    let mut b1 = BlendingArray::<1, A>::new();
+    let mut b3 = BlendingArray::<3, A>::new();
+    let mut b8 = BlendingArray::<8, A>::new();
+    let mut h3 = Hybrid::<3, A>::new();
+    for f in stream {
+        b1.insert(f);
+        b3.insert(f);
+        b8.insert(f);
+        h3.insert(f);
+        for rows in [&b1.rows()[..], &b3.rows()[..], &b8.rows()[..], &h3.head()[..]] {
+            check_invariants(rows, true).map_err(TestCaseError::fail)?;
+        }
+    }
+    // Additive light may exceed coverage; the ordering invariants still hold.
+    for f in additive {
+        b3.insert(f);
+        h3.insert(f);
+        check_invariants(b3.rows(), false).map_err(TestCaseError::fail)?;
+        check_invariants(h3.head(), false).map_err(TestCaseError::fail)?;
+    }
+    Ok(())
+}
+
+fn p7<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+    let got = pixel(run_mlab::<8, A>(stream).resolve().over(bg()));
+    let (want, _, bound) = oracle_with_bound_delta(stream, BG, delta::<A>());
+    for ch in 0..3 {
+        prop_assert!(
+            (got[ch] - want[ch]).abs() <= bound[ch],
+            "{}: got {:?} want {:?}",
+            A::NAME,
+            got,
+            want
         );
     }
     Ok(())
@@ -78,22 +207,15 @@ proptest! {
     /// 1. M >= number of fragments: MLAB equals the oracle within the quantization bound.
     #[test]
     fn p1_mlab_with_enough_rows_matches_oracle(stream in prop::collection::vec(normal_fragment(), 0..=8)) {
-        mlab_fits_matches_oracle::<1>(&stream[..stream.len().min(1)])?;
-        mlab_fits_matches_oracle::<2>(&stream[..stream.len().min(2)])?;
-        mlab_fits_matches_oracle::<4>(&stream[..stream.len().min(4)])?;
-        mlab_fits_matches_oracle::<8>(&stream)?;
+        p1::<Paper>(&stream)?;
+        p1::<Unbiased>(&stream)?;
     }
 
     /// 1 (HT). K >= number of fragments: the tail stays empty and HT equals the oracle too.
     #[test]
     fn p1_hybrid_with_enough_head_rows_matches_oracle(stream in prop::collection::vec(normal_fragment(), 0..=7)) {
-        let h = run_hybrid::<7>(&stream);
-        prop_assert_eq!(h.tail().count(), 0);
-        let got = pixel(h.resolve().over(bg()));
-        let (want, _, bound) = oracle_with_bound(&stream, BG);
-        for ch in 0..3 {
-            prop_assert!((got[ch] - want[ch]).abs() <= bound[ch]);
-        }
+        p1_hybrid::<Paper>(&stream)?;
+        p1_hybrid::<Unbiased>(&stream)?;
     }
 
     /// 2. Sorted streams (either direction): MLAB with one row equals the oracle within 4 n DELTA
@@ -104,10 +226,8 @@ proptest! {
         front_to_back in any::<bool>(),
     ) {
         let stream = sorted(stream, front_to_back);
-        let got = pixel(run_mlab::<1>(&stream).resolve().over(bg()));
-        let (want, _) = oracle(&stream, BG);
-        let bound = 4.0 * stream.len() as f64 * DELTA;
-        prop_assert!(max_diff(got, want) <= bound, "got {:?} want {:?} bound {}", got, want, bound);
+        p2::<Paper>(&stream)?;
+        p2::<Unbiased>(&stream)?;
     }
 
     /// 3. Fully opaque fragments: the pixel is the nearest fragment's color, exactly, for every
@@ -117,16 +237,8 @@ proptest! {
         stream in prop::collection::vec((prop::array::uniform3(0.0f32..=1.0), depth()), 1..=20),
     ) {
         let stream: Vec<Fragment> = stream.into_iter().map(|(c, z)| straight(c, 1.0, z)).collect();
-        let nearest = stream[oracle_order(&stream)[0]].row();
-        let want = [nearest.color()[0], nearest.color()[1], nearest.color()[2], 255];
-        let px = |r: mlab::Resolved| mlab::to_rgba8(r.over(bg()).extend(1.0));
-        prop_assert_eq!(px(run_mlab::<1>(&stream).resolve()), want);
-        prop_assert_eq!(px(run_mlab::<2>(&stream).resolve()), want);
-        prop_assert_eq!(px(run_mlab::<3>(&stream).resolve()), want);
-        prop_assert_eq!(px(run_mlab::<4>(&stream).resolve()), want);
-        prop_assert_eq!(px(run_mlab::<8>(&stream).resolve()), want);
-        prop_assert_eq!(px(run_hybrid::<1>(&stream).resolve()), want);
-        prop_assert_eq!(px(run_hybrid::<3>(&stream).resolve()), want);
+        p3::<Paper>(&stream)?;
+        p3::<Unbiased>(&stream)?;
     }
 
     /// 4. Background visibility does not depend on submission order: MLAB within n/255
@@ -138,16 +250,8 @@ proptest! {
     ) {
         let mut shuffled = stream.clone();
         shuffle(&mut shuffled, seed);
-        let bound = stream.len() as f64 / 255.0 + 1e-5;
-        let v1 = visibility_bytes_product(run_mlab::<1>(&stream).rows()) as f64;
-        let v2 = visibility_bytes_product(run_mlab::<1>(&shuffled).rows()) as f64;
-        prop_assert!((v1 - v2).abs() <= bound, "M=1: {} vs {}", v1, v2);
-        let v1 = visibility_bytes_product(run_mlab::<4>(&stream).rows()) as f64;
-        let v2 = visibility_bytes_product(run_mlab::<4>(&shuffled).rows()) as f64;
-        prop_assert!((v1 - v2).abs() <= bound, "M=4: {} vs {}", v1, v2);
-        // And both stay within n/(2*255) of the product of the quantized transmittances.
-        let exact: f64 = stream.iter().map(|f| f.row().transmittance() as f64 / 255.0).product();
-        prop_assert!((v1 - exact).abs() <= bound / 2.0 + 1e-5);
+        p4::<Paper>(&stream, &shuffled)?;
+        p4::<Unbiased>(&stream, &shuffled)?;
     }
 
     /// 4 (HT) and 5. HT is bit-identical under any permutation of a stream with distinct depths.
@@ -171,12 +275,8 @@ proptest! {
             .collect();
         let mut shuffled = stream.clone();
         shuffle(&mut shuffled, seed);
-        prop_assert_eq!(run_hybrid::<1>(&stream), run_hybrid::<1>(&shuffled));
-        prop_assert_eq!(run_hybrid::<3>(&stream), run_hybrid::<3>(&shuffled));
-        prop_assert_eq!(run_hybrid::<7>(&stream), run_hybrid::<7>(&shuffled));
-        let (a, b) = (run_hybrid::<3>(&stream).resolve(), run_hybrid::<3>(&shuffled).resolve());
-        prop_assert_eq!(a.transmittance.to_bits(), b.transmittance.to_bits());
-        prop_assert_eq!(a.color.to_array().map(f32::to_bits), b.color.to_array().map(f32::to_bits));
+        p5::<Paper>(&stream, &shuffled)?;
+        p5::<Unbiased>(&stream, &shuffled)?;
     }
 
     /// 6. After any stream: rows sorted, empty rows only at the back, color within coverage.
@@ -185,26 +285,8 @@ proptest! {
         stream in prop::collection::vec(normal_fragment(), 0..=40),
         additive in prop::collection::vec(additive_fragment(), 0..=4),
     ) {
-        let mut b1 = BlendingArray::<1>::new();
-        let mut b3 = BlendingArray::<3>::new();
-        let mut b8 = BlendingArray::<8>::new();
-        let mut h3 = Hybrid::<3>::new();
-        for f in &stream {
-            b1.insert(f);
-            b3.insert(f);
-            b8.insert(f);
-            h3.insert(f);
-            for rows in [&b1.rows()[..], &b3.rows()[..], &b8.rows()[..], &h3.head()[..]] {
-                check_invariants(rows, true).map_err(TestCaseError::fail)?;
-            }
-        }
-        // Additive light may exceed coverage; the ordering invariants still hold.
-        for f in &additive {
-            b3.insert(f);
-            h3.insert(f);
-            check_invariants(b3.rows(), false).map_err(TestCaseError::fail)?;
-            check_invariants(h3.head(), false).map_err(TestCaseError::fail)?;
-        }
+        p6::<Paper>(&stream, &additive)?;
+        p6::<Unbiased>(&stream, &additive)?;
     }
 
     /// 7. Additive fragments add their light (within rounding) in front of or behind others.
@@ -217,11 +299,8 @@ proptest! {
         let mut stream = normal;
         stream.extend(additive);
         shuffle(&mut stream, seed);
-        let got = pixel(run_mlab::<8>(&stream).resolve().over(bg()));
-        let (want, _, bound) = oracle_with_bound(&stream, BG);
-        for ch in 0..3 {
-            prop_assert!((got[ch] - want[ch]).abs() <= bound[ch], "got {:?} want {:?}", got, want);
-        }
+        p7::<Paper>(&stream)?;
+        p7::<Unbiased>(&stream)?;
     }
 }
 
@@ -244,18 +323,18 @@ fn p7_additive_light_survives_the_merge() {
     let light_behind = Fragment::additive(Vec3::new(0.0, 0.2, 0.0), 2.0).unwrap();
     let light_front = Fragment::additive(Vec3::new(0.0, 0.2, 0.0), 0.5).unwrap();
     for order in [[red, light_behind], [light_behind, red]] {
-        let c = run_mlab::<1>(&order).resolve().over(Vec3::ZERO);
+        let c = run_mlab::<1, Paper>(&order).resolve().over(Vec3::ZERO);
         // 0.5 red, light 0.2 seen through T = 127/255.
         let want = Vec3::new(128.0 / 255.0, 51.0 * 127.0 / 255.0 / 255.0, 0.0);
         assert!((c - want).abs().max_element() <= 1.0 / 255.0, "{c:?} vs {want:?}");
     }
     for order in [[red, light_front], [light_front, red]] {
-        let c = run_mlab::<1>(&order).resolve().over(Vec3::ZERO);
+        let c = run_mlab::<1, Paper>(&order).resolve().over(Vec3::ZERO);
         let want = Vec3::new(128.0 / 255.0, 51.0 / 255.0, 0.0);
         assert!((c - want).abs().max_element() <= 1.0 / 255.0, "{c:?} vs {want:?}");
     }
     // Into an HT tail: light is neither skipped (T = 255) nor lost (alpha sum 0).
-    let mut h = Hybrid::<1>::new();
+    let mut h = Hybrid::<1, Paper>::new();
     h.insert(&red);
     h.insert(&light_behind);
     assert_eq!(h.tail().count(), 1);
@@ -267,13 +346,14 @@ fn p7_additive_light_survives_the_merge() {
 #[test]
 fn listing1_merges_the_last_two_rows() {
     let mut rows = [Row::EMPTY; 2];
-    listing1::insert(&mut rows, Row::new([10, 0, 0], 200, 3.0));
-    listing1::insert(&mut rows, Row::new([0, 20, 0], 100, 1.0));
+    let insert = listing1::insert_with::<Paper, 2>;
+    insert(&mut rows, Row::new([10, 0, 0], 200, 3.0));
+    insert(&mut rows, Row::new([0, 20, 0], 100, 1.0));
     assert_eq!(rows, [Row::new([0, 20, 0], 100, 1.0), Row::new([10, 0, 0], 200, 3.0)]);
-    listing1::insert(&mut rows, Row::new([0, 0, 30], 50, 2.0));
+    insert(&mut rows, Row::new([0, 0, 30], 50, 2.0));
     // B' = [z1, z2, z3]; merge rows z2 and z3: A = (0,0,30) + (10,0,0)*50/255, T = 50*200/255.
     assert_eq!(rows, [Row::new([0, 20, 0], 100, 1.0), Row::new([2, 0, 30], 39, 2.0)]);
     // Equal depth goes in front (coplanar fragments blend like OVER in submission order).
-    listing1::insert(&mut rows, Row::new([0, 0, 0], 0, 1.0));
+    insert(&mut rows, Row::new([0, 0, 0], 0, 1.0));
     assert_eq!(rows[0], Row::new([0, 0, 0], 0, 1.0));
 }

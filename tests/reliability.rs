@@ -7,7 +7,8 @@ use mlab::half::f16;
 use mlab::resolve::INV255;
 use mlab::{
     Background, BlendingArray, Fragment, FragmentError as E, FramebufferError as FbE, Hybrid, HybridFramebuffer,
-    MlabFramebuffer, Resolved, Row, Tail, hybrid, mlab as mlab_kernel, resolve_rows, to_rgba8, to_rgba16f,
+    MlabFramebuffer, Paper, Resolved, Row, hybrid, hybrid::PaperTail as Tail, mlab as mlab_kernel, resolve_rows,
+    to_rgba8, to_rgba16f,
 };
 
 const OK: Vec3 = Vec3::splat(0.25);
@@ -183,7 +184,7 @@ fn premultiplied_color_above_alpha_is_additive_light() {
     let part = Fragment::premultiplied(Vec3::new(0.5, 0.0, 0.0), 0.1, 2.0).unwrap();
     let light = Fragment::additive(Vec3::new(0.0, 0.4, 0.0), 1.0).unwrap();
     assert_eq!(light.row(), Row::new([0, 102, 0], 255, 1.0));
-    let mut b = BlendingArray::<4>::new();
+    let mut b = BlendingArray::<4, Paper>::new();
     b.insert(&part);
     b.insert(&light);
     let r = b.resolve();
@@ -197,7 +198,7 @@ fn premultiplied_color_above_alpha_is_additive_light() {
         "{r:?}"
     );
     // HT keeps the light when it leaves the head (the paper's T != 1 test would drop it).
-    let mut h = Hybrid::<0>::new();
+    let mut h = Hybrid::<0, Paper>::new();
     h.insert(&light);
     assert_eq!(h.tail().color_sum(), [0, 102, 0]);
 }
@@ -452,7 +453,7 @@ fn saturated_tail() {
     let frags: Vec<Fragment> = (0..40)
         .map(|i| Fragment::premultiplied(Vec3::splat(0.9), 0.95, i as f32).unwrap())
         .collect();
-    let (mut a, mut b) = (Hybrid::<2>::new(), Hybrid::<2>::new());
+    let (mut a, mut b) = (Hybrid::<2, Paper>::new(), Hybrid::<2, Paper>::new());
     frags.iter().for_each(|f| a.insert(f));
     frags.iter().rev().for_each(|f| b.insert(f));
     assert_eq!(a, b);
@@ -500,7 +501,7 @@ fn lanes_invalid_fragments_and_off_lanes() {
         depth: [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, f32::INFINITY, 3.0],
     };
     let mask = 0b0111_1111;
-    let q = frags.quantize(mask);
+    let q = frags.quantize_with::<Paper>(mask);
     assert_eq!((q.valid, q.invalid), (0b0000_0001, 0b0111_1110));
     for lane in 0..LANES {
         let c = Vec3::new(frags.color[0][lane], frags.color[1][lane], frags.color[2][lane]);
@@ -512,7 +513,10 @@ fn lanes_invalid_fragments_and_off_lanes() {
     let mut span = [[garbage; LANES]; 2];
     span[0][0] = Row::EMPTY;
     span[1][0] = Row::EMPTY;
-    assert_eq!(lanes::mlab_insert_fragments(&mut span, &frags, mask), q.invalid);
+    assert_eq!(
+        lanes::mlab_insert_fragments_with::<Paper, 2>(&mut span, &frags, mask),
+        q.invalid
+    );
     assert_eq!(span[0][0], Row::new([128, 64, 0], 127, 1.0));
     assert!((1..LANES).all(|lane| span[0][lane] == garbage && span[1][lane] == garbage));
     let mut ht = HybridSpan::<1>::new();
@@ -589,7 +593,7 @@ fn finding_f1_tail_never_amplifies_light() {
         }
     }
     // The same tail from valid fragments: one faint fragment and 43689 additive ones.
-    let mut h = Hybrid::<0>::new();
+    let mut h = Hybrid::<0, Paper>::new();
     h.insert(&Fragment::premultiplied(Vec3::ONE, 1.0 / 255.0, 0.0).unwrap());
     let light = Fragment::additive(Vec3::ONE, 1.0).unwrap();
     for _ in 1..43690 {
@@ -636,4 +640,66 @@ fn check_tail_light(alpha: u32, count: u32) {
         r.color.x,
         100.0 * err
     );
+}
+
+/// The default tail (13-bit sums, 12-bit count) from arbitrary bytes: every extreme of
+/// every field resolves finite and in range, like the paper's.
+#[test]
+fn wide_tail_from_arbitrary_bytes() {
+    use mlab::Tail as WideTail;
+    let max = 8191.0 / 255.0;
+    for v in [
+        0u64,
+        1,
+        u64::MAX,
+        0x000f_ffff_ffff_ffff,
+        0xfff0_0000_0000_0000,
+        0x7f80_0000_0000_0000,
+    ] {
+        for shift in [0, 13, 26, 39, 52] {
+            for t in [WideTail::from_le_u64(v), WideTail::from_le_u64(v.rotate_left(shift))] {
+                assert_finite_in_range(t.resolve(), max);
+            }
+        }
+    }
+    // Count 0 with non-zero sums resolves as count 1; a mean alpha above 1 is clamped.
+    let t = WideTail::from_sums([8191, 0, 0], 0, 0);
+    assert_eq!(t.resolve().transmittance, 1.0);
+    let r = WideTail::from_sums([255; 3], 8191, 1).resolve();
+    assert_eq!(r.transmittance, 0.0);
+    assert_finite_in_range(r, max);
+}
+
+/// The default tail saturates without wrapping and stays order independent when it does.
+#[test]
+fn wide_tail_saturates() {
+    use mlab::Tail as WideTail;
+    let mut t = WideTail::EMPTY;
+    for i in 0..40 {
+        t.add(Row::new([255; 3], 0, i as f32));
+    }
+    assert_eq!((t.color_sum(), t.alpha_sum(), t.count()), ([8191; 3], 8191, 40));
+    assert!(t.saturated());
+    let mut t = WideTail::from_sums([0; 3], 0, 4095);
+    t.add(Row::new([1, 0, 0], 255, 1.0));
+    assert_eq!((t.count(), t.color_sum()[0]), (4095, 1));
+    let frags: Vec<Fragment> = (0..60)
+        .map(|i| Fragment::premultiplied(Vec3::splat(0.9), 0.95, i as f32).unwrap())
+        .collect();
+    let (mut a, mut b) = (Hybrid::<2>::new(), Hybrid::<2>::new());
+    frags.iter().for_each(|f| a.insert(f));
+    frags.iter().rev().for_each(|f| b.insert(f));
+    assert_eq!(a, b);
+    assert!(a.tail().saturated());
+    // 200 fragments of alpha 0.03 saturate the paper's color sums, not the default tail.
+    let faint: Vec<Fragment> = (0..200)
+        .map(|i| Fragment::straight(Vec3::ONE, 0.03, i as f32).unwrap())
+        .collect();
+    let (mut wide, mut paper) = (Hybrid::<0>::new(), Hybrid::<0, Paper>::new());
+    faint.iter().for_each(|f| {
+        wide.insert(f);
+        paper.insert(f)
+    });
+    assert!(paper.tail().saturated());
+    assert!(!wide.tail().saturated());
 }

@@ -5,7 +5,8 @@ use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::{
     Background, BlendingArray, Fragment, FramebufferError, Hybrid, HybridFramebuffer, HybridSpanFramebuffer,
-    MlabFramebuffer, Resolved, Row, SpanFramebuffer, Tail, hybrid, mlab as mlab_mod, resolve_rows, to_rgba8,
+    MlabFramebuffer, Paper, Resolved, Row, SpanFramebuffer, hybrid, hybrid::PaperTail as Tail, mlab as mlab_mod, resolve_rows,
+    to_rgba8,
     to_rgba16f,
 };
 
@@ -64,7 +65,7 @@ pub fn mlab_stream(data: &[u8]) {
 }
 
 fn mlab_stream_m<const M: usize>(input: &mut Input) {
-    let mut array = BlendingArray::<M>::new();
+    let mut array = BlendingArray::<M, Paper>::new();
     let mut reference = RefMlab::new(M);
     // Lanes: 8 pixels; lane 0 gets every fragment (it must equal `array`), the others the
     // fragments their bit of `lane_mask(n)` selects; off lanes are handed a garbage row.
@@ -85,10 +86,10 @@ fn mlab_stream_m<const M: usize>(input: &mut Input) {
         array.insert(&f);
         let mask = lane_mask(accepted.len());
         let rows8 = lane_rows(f.row(), mask);
-        lanes::mlab_insert(&mut span, &rows8, mask);
+        lanes::mlab_insert_with::<Paper, _>(&mut span, &rows8, mask);
         for (lane, a) in lane_arrays.iter_mut().enumerate() {
             if mask >> lane & 1 == 1 {
-                mlab_mod::insert(a, rows8[lane]);
+                mlab_mod::insert_with::<Paper, _>(a, rows8[lane]);
             }
         }
         assert_eq!(
@@ -144,9 +145,9 @@ pub fn hybrid_stream(data: &[u8]) {
 }
 
 fn hybrid_stream_k<const K: usize>(input: &mut Input) {
-    let mut ht = Hybrid::<K>::new();
-    let mut span = HybridSpan::<K>::new();
-    let mut lane_px = [Hybrid::<K>::new(); LANES];
+    let mut ht = Hybrid::<K, Paper>::new();
+    let mut span = HybridSpan::<K, Paper>::new();
+    let mut lane_px = [Hybrid::<K, Paper>::new(); LANES];
     let mut frags = Vec::new();
     let mut rows = Vec::new();
     // The stream ends at a fragment tag 0xff (so the permutation seed can follow) or at the end.
@@ -206,7 +207,7 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
     }
     let reversed: Vec<usize> = (0..n).rev().collect();
     for order in [order, reversed] {
-        let mut other = Hybrid::<K>::new();
+        let mut other = Hybrid::<K, Paper>::new();
         for &i in &order {
             other.insert(&frags[i]);
         }
@@ -263,7 +264,7 @@ pub fn check_mlab_resolve_lanes<const M: usize>(span: &MlabSpan<M>, pixels: &[[R
 }
 
 /// A lanes HT span equals the scalar pixels byte for byte, and resolves bit for bit.
-pub fn check_hybrid_lanes<const K: usize>(span: &HybridSpan<K>, pixels: &[Hybrid<K>; LANES]) {
+pub fn check_hybrid_lanes<const K: usize>(span: &HybridSpan<K, Paper>, pixels: &[Hybrid<K, Paper>; LANES]) {
     let r = lanes::hybrid_resolve(span);
     let bg = Background::Transparent;
     let px8 = lanes::hybrid_resolve_rgba8(span, bg);
@@ -293,9 +294,9 @@ pub fn check_fragment_lanes(raws: &[crate::input::RawFragment], mask: u8) {
     };
     for straight in [false, true] {
         let q = if straight {
-            fl.quantize_straight(mask)
+            fl.quantize_straight_with::<Paper>(mask)
         } else {
-            fl.quantize(mask)
+            fl.quantize_with::<Paper>(mask)
         };
         assert_eq!(q.valid & q.invalid, 0);
         assert_eq!((q.valid | q.invalid) & !mask, 0, "off lanes reported: {q:?}");
@@ -328,13 +329,13 @@ pub fn check_fragment_lanes(raws: &[crate::input::RawFragment], mask: u8) {
     }
     // The insert_fragments entry points: invalid lanes reported and left untouched.
     let mut span = [[Row::EMPTY; LANES]; 2];
-    let invalid = lanes::mlab_insert_fragments(&mut span, &fl, mask);
-    let q = fl.quantize(mask);
+    let invalid = lanes::mlab_insert_fragments_with::<Paper, _>(&mut span, &fl, mask);
+    let q = fl.quantize_with::<Paper>(mask);
     assert_eq!(invalid, q.invalid);
     let mut expected = [[Row::EMPTY; 2]; LANES];
     for (lane, p) in expected.iter_mut().enumerate() {
         if q.valid >> lane & 1 == 1 {
-            mlab_mod::insert(p, q.rows[lane]);
+            mlab_mod::insert_with::<Paper, _>(p, q.rows[lane]);
         }
     }
     assert_eq!(lanes::to_pixel_major(&span), expected);
@@ -427,7 +428,7 @@ fn garbage_mlab<const M: usize>(input: &mut Input) {
     let last = expected[M - 1];
     expected[M - 1] = ref_merge(last, pushed);
     let mut after = rows;
-    mlab_mod::insert(&mut after, new);
+    mlab_mod::insert_with::<Paper, _>(&mut after, new);
     // LANES: the same insert on a lanes array holding `rows`; assert_eq! with `after`.
     assert_eq!(after.as_slice(), expected.as_slice(), "insert {new:?} into {rows:?}");
     // Rows that satisfied the invariants keep them for any row that is not NaN or a
@@ -451,10 +452,10 @@ fn garbage_mlab<const M: usize>(input: &mut Input) {
     }
     let mut span = lanes::from_pixel_major(&pixels);
     check_mlab_resolve_lanes(&span, &pixels);
-    lanes::mlab_insert(&mut span, &rows8, mask);
+    lanes::mlab_insert_with::<Paper, _>(&mut span, &rows8, mask);
     for (lane, p) in pixels.iter_mut().enumerate() {
         if mask >> lane & 1 == 1 {
-            mlab_mod::insert(p, rows8[lane]);
+            mlab_mod::insert_with::<Paper, _>(p, rows8[lane]);
         }
     }
     assert_eq!(
@@ -533,7 +534,7 @@ fn garbage_hybrid<const K: usize>(input: &mut Input) {
 
     // Lanes on garbage: lane l holds the head rotated by l and the tail bytes rotated by l.
     let mask = input.u8().unwrap_or(0xff);
-    let mut pixels = [Hybrid::<K>::new(); LANES];
+    let mut pixels = [Hybrid::<K, Paper>::new(); LANES];
     for (lane, p) in pixels.iter_mut().enumerate() {
         let mut hd = head;
         if K > 0 {
@@ -543,7 +544,7 @@ fn garbage_hybrid<const K: usize>(input: &mut Input) {
         tb.rotate_left(lane);
         *p = Hybrid::from_parts(hd, Tail::from_bytes(tb));
     }
-    let mut span = HybridSpan::<K>::new();
+    let mut span = HybridSpan::<K, Paper>::new();
     for (lane, p) in pixels.iter().enumerate() {
         for j in 0..K {
             span.head[j][lane] = p.head()[j];
@@ -702,9 +703,9 @@ impl<const M: usize> Layout for MlabLayout<M> {
     fn max_color() -> f32 {
         M as f32
     }
-    type View<'a> = MlabFramebuffer<'a, M>;
+    type View<'a> = MlabFramebuffer<'a, M, Paper>;
     fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
-        SpanFramebuffer::<M>::rows_needed(w, h)
+        SpanFramebuffer::<M, Paper>::rows_needed(w, h)
     }
     fn span_insert(
         s: &mut [Row],
@@ -715,7 +716,7 @@ impl<const M: usize> Layout for MlabLayout<M> {
         rows: &[Row; LANES],
         mask: u8,
     ) -> Result<(), FramebufferError> {
-        SpanFramebuffer::<M>::new(s, w, h)
+        SpanFramebuffer::<M, Paper>::new(s, w, h)
             .expect("span storage")
             .insert_span(x, y, rows, mask)
     }
@@ -727,14 +728,14 @@ impl<const M: usize> Layout for MlabLayout<M> {
         out: &mut [Vec4],
         bg: Background,
     ) -> Result<(), FramebufferError> {
-        let v = SpanFramebuffer::<M>::new(s, w, h).expect("span storage");
+        let v = SpanFramebuffer::<M, Paper>::new(s, w, h).expect("span storage");
         resolve_all_impl!(v, which, out, bg)
     }
     fn span_clear(s: &mut [Row], w: u32, h: u32) {
-        SpanFramebuffer::<M>::new(s, w, h).expect("span storage").clear()
+        SpanFramebuffer::<M, Paper>::new(s, w, h).expect("span storage").clear()
     }
     fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
-        SpanFramebuffer::<M>::new(s, w, h)
+        SpanFramebuffer::<M, Paper>::new(s, w, h)
             .expect("span storage")
             .pixel(x, y)
             .map(|p| p.to_vec())
@@ -779,7 +780,7 @@ impl<const M: usize> Layout for MlabLayout<M> {
             }
         }
         let before = span;
-        lanes::mlab_insert(&mut span, &lane_rows(row, on), on);
+        lanes::mlab_insert_with::<Paper, _>(&mut span, &lane_rows(row, on), on);
         for lane in (0..LANES).filter(|&l| on >> l & 1 == 0) {
             for j in 0..M {
                 assert_eq!(
@@ -801,9 +802,9 @@ impl<const K: usize> Layout for HybridLayout<K> {
     fn max_color() -> f32 {
         K as f32 + tail_color_limit()
     }
-    type View<'a> = HybridFramebuffer<'a, K>;
+    type View<'a> = HybridFramebuffer<'a, K, Paper>;
     fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
-        HybridSpanFramebuffer::<K>::rows_needed(w, h)
+        HybridSpanFramebuffer::<K, Paper>::rows_needed(w, h)
     }
     fn span_insert(
         s: &mut [Row],
@@ -814,7 +815,7 @@ impl<const K: usize> Layout for HybridLayout<K> {
         rows: &[Row; LANES],
         mask: u8,
     ) -> Result<(), FramebufferError> {
-        HybridSpanFramebuffer::<K>::new(s, w, h)
+        HybridSpanFramebuffer::<K, Paper>::new(s, w, h)
             .expect("span storage")
             .insert_span(x, y, rows, mask)
     }
@@ -826,14 +827,14 @@ impl<const K: usize> Layout for HybridLayout<K> {
         out: &mut [Vec4],
         bg: Background,
     ) -> Result<(), FramebufferError> {
-        let v = HybridSpanFramebuffer::<K>::new(s, w, h).expect("span storage");
+        let v = HybridSpanFramebuffer::<K, Paper>::new(s, w, h).expect("span storage");
         resolve_all_impl!(v, which, out, bg)
     }
     fn span_clear(s: &mut [Row], w: u32, h: u32) {
-        HybridSpanFramebuffer::<K>::new(s, w, h).expect("span storage").clear()
+        HybridSpanFramebuffer::<K, Paper>::new(s, w, h).expect("span storage").clear()
     }
     fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
-        let (head, tail) = HybridSpanFramebuffer::<K>::new(s, w, h)
+        let (head, tail) = HybridSpanFramebuffer::<K, Paper>::new(s, w, h)
             .expect("span storage")
             .pixel(x, y)?;
         let mut v = head.to_vec();
@@ -875,7 +876,7 @@ impl<const K: usize> Layout for HybridLayout<K> {
     fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8) {
         let on = mask & inside(w, h, x0, y);
         let base = |lane: usize| (y as usize * w as usize + x0 as usize + lane) * (K + 1);
-        let mut span = HybridSpan::<K> {
+        let mut span = HybridSpan::<K, Paper> {
             head: core::array::from_fn(|j| core::array::from_fn(|lane| sentinel(lane, j))),
             tails: core::array::from_fn(|lane| Tail::from_bytes(sentinel(lane, K).to_bytes())),
         };

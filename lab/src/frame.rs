@@ -49,7 +49,7 @@ use crate::stream::{Frag, Stream};
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::lanes::{FragmentLanes, LANES};
-use mlab::{Background, Row, SpanFramebuffer, to_rgba8};
+use mlab::{Background, Paper, Row, SpanFramebuffer, to_rgba8};
 use rayon::prelude::*;
 
 /// Lines per band when none is given: the fastest on the development machine for MLAB 4 at
@@ -232,7 +232,7 @@ pub fn quantize_rows(group: &[Frag]) -> ([Row; LANES], u8) {
         lanes.depth[i] = f.depth;
     }
     let mask = (((1u16 << group.len().min(LANES)) - 1) & 0xff) as u8;
-    let q = lanes.quantize(mask);
+    let q = lanes.quantize_with::<Paper>(mask);
     (q.rows, q.invalid)
 }
 
@@ -375,11 +375,11 @@ impl Compositor {
     pub fn mlab<const M: usize>(&mut self, stream: &Stream, out: &mut [[u8; 4]]) -> Result<(), String> {
         self.rows.fill(stream, self.band_lines, self.chunk, quantize_rows)?;
         let (w, h, lines) = (stream.width, stream.height, self.band_lines);
-        let n = SpanFramebuffer::<M>::rows_needed(w, h).map_err(|e| e.to_string())?;
+        let n = SpanFramebuffer::<M, Paper>::rows_needed(w, h).map_err(|e| e.to_string())?;
         if self.mlab.len() != n {
             resize(&mut self.mlab, n, Row::EMPTY);
         }
-        let mut fb = SpanFramebuffer::<M>::new(&mut self.mlab, w, h).map_err(|e| e.to_string())?;
+        let mut fb = SpanFramebuffer::<M, Paper>::new(&mut self.mlab, w, h).map_err(|e| e.to_string())?;
         let bg = Background::Opaque(Vec3::from(stream.background));
         let bins = &self.rows;
         let work: Vec<_> = fb
@@ -543,11 +543,11 @@ pub fn mlab_unbinned<const M: usize>(
     if w >= MAX_EXTENT || h >= MAX_EXTENT {
         return Err(format!("frame {w}x{h} too large"));
     }
-    let n = SpanFramebuffer::<M>::rows_needed(w, h).map_err(|e| e.to_string())?;
+    let n = SpanFramebuffer::<M, Paper>::rows_needed(w, h).map_err(|e| e.to_string())?;
     if storage.len() != n {
         resize(storage, n, Row::EMPTY);
     }
-    let mut fb = SpanFramebuffer::<M>::new_cleared(storage, w, h).map_err(|e| e.to_string())?;
+    let mut fb = SpanFramebuffer::<M, Paper>::new_cleared(storage, w, h).map_err(|e| e.to_string())?;
     let by_width = Divider::new(w);
     if !by_width.exact_below(stream.pixels() as u64) {
         return Err(format!("frame {w}x{h} too large"));
@@ -592,7 +592,7 @@ struct Pending {
 }
 
 impl Pending {
-    fn new<const M: usize>(fb: &SpanFramebuffer<'_, M>) -> Pending {
+    fn new<const M: usize>(fb: &SpanFramebuffer<'_, M, Paper>) -> Pending {
         let spans_per_line = fb.width().div_ceil(LANES as u32) as usize;
         Pending {
             spans_per_line,
@@ -602,7 +602,7 @@ impl Pending {
 
     fn flush<const M: usize>(
         spans_per_line: usize,
-        fb: &mut SpanFramebuffer<'_, M>,
+        fb: &mut SpanFramebuffer<'_, M, Paper>,
         s: usize,
         rows: &[Row; LANES],
         mask: u8,
@@ -613,7 +613,7 @@ impl Pending {
 
     fn push<const M: usize>(
         &mut self,
-        fb: &mut SpanFramebuffer<'_, M>,
+        fb: &mut SpanFramebuffer<'_, M, Paper>,
         e: &Entry<Row>,
     ) -> Result<(), mlab::FramebufferError> {
         let (x, y) = ((e.pos & 0xffff) as usize, (e.pos >> 16) as usize);
@@ -639,7 +639,10 @@ impl Pending {
         Ok(())
     }
 
-    fn flush_all<const M: usize>(&mut self, fb: &mut SpanFramebuffer<'_, M>) -> Result<(), mlab::FramebufferError> {
+    fn flush_all<const M: usize>(
+        &mut self,
+        fb: &mut SpanFramebuffer<'_, M, Paper>,
+    ) -> Result<(), mlab::FramebufferError> {
         for (s, (rows, mask)) in self.slots.iter_mut().enumerate() {
             if *mask != 0 {
                 Self::flush(self.spans_per_line, fb, s, rows, *mask)?;
@@ -652,7 +655,7 @@ impl Pending {
 
 /// Insert one band's fragments through [`Pending`] span inserts.
 fn mlab_band<'e, const M: usize>(
-    band: &mut SpanFramebuffer<'_, M>,
+    band: &mut SpanFramebuffer<'_, M, Paper>,
     entries: impl Iterator<Item = &'e Entry<Row>>,
 ) -> Result<(), mlab::FramebufferError> {
     let mut pending = Pending::new(band);

@@ -19,7 +19,7 @@ use crate::stream::{Bins, Stream};
 use mlab::glam::Vec3;
 use mlab::half::f16;
 use mlab::lanes::{self, HybridSpan, LANES, ResolvedLanes};
-use mlab::{HybridFramebuffer, MlabFramebuffer, Resolved, Row};
+use mlab::{HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row};
 
 /// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
 /// visibility of the background (the product of transmittances the method ends up with).
@@ -257,25 +257,25 @@ impl Method {
                 1 => run_lanes(
                     frame,
                     [[Row::EMPTY; LANES]; 1],
-                    lanes::mlab_insert::<1>,
+                    lanes::mlab_insert_with::<Paper, 1>,
                     lanes::mlab_resolve::<1>,
                 ),
                 2 => run_lanes(
                     frame,
                     [[Row::EMPTY; LANES]; 2],
-                    lanes::mlab_insert::<2>,
+                    lanes::mlab_insert_with::<Paper, 2>,
                     lanes::mlab_resolve::<2>,
                 ),
                 4 => run_lanes(
                     frame,
                     [[Row::EMPTY; LANES]; 4],
-                    lanes::mlab_insert::<4>,
+                    lanes::mlab_insert_with::<Paper, 4>,
                     lanes::mlab_resolve::<4>,
                 ),
                 8 => run_lanes(
                     frame,
                     [[Row::EMPTY; LANES]; 8],
-                    lanes::mlab_insert::<8>,
+                    lanes::mlab_insert_with::<Paper, 8>,
                     lanes::mlab_resolve::<8>,
                 ),
                 _ => Err(format!("MLAB {m} lanes: supported row counts are 1, 2, 4, 8")),
@@ -283,27 +283,27 @@ impl Method {
             Method::HybridLanes(k) => match k {
                 0 => run_lanes(
                     frame,
-                    HybridSpan::<0>::new(),
-                    lanes::hybrid_insert::<0>,
-                    lanes::hybrid_resolve::<0>,
+                    HybridSpan::<0, Paper>::new(),
+                    lanes::hybrid_insert::<0, Paper>,
+                    lanes::hybrid_resolve::<0, Paper>,
                 ),
                 1 => run_lanes(
                     frame,
-                    HybridSpan::<1>::new(),
-                    lanes::hybrid_insert::<1>,
-                    lanes::hybrid_resolve::<1>,
+                    HybridSpan::<1, Paper>::new(),
+                    lanes::hybrid_insert::<1, Paper>,
+                    lanes::hybrid_resolve::<1, Paper>,
                 ),
                 3 => run_lanes(
                     frame,
-                    HybridSpan::<3>::new(),
-                    lanes::hybrid_insert::<3>,
-                    lanes::hybrid_resolve::<3>,
+                    HybridSpan::<3, Paper>::new(),
+                    lanes::hybrid_insert::<3, Paper>,
+                    lanes::hybrid_resolve::<3, Paper>,
                 ),
                 7 => run_lanes(
                     frame,
-                    HybridSpan::<7>::new(),
-                    lanes::hybrid_insert::<7>,
-                    lanes::hybrid_resolve::<7>,
+                    HybridSpan::<7, Paper>::new(),
+                    lanes::hybrid_insert::<7, Paper>,
+                    lanes::hybrid_resolve::<7, Paper>,
                 ),
                 _ => Err(format!("HT {k} lanes: supported head sizes are 0, 1, 3, 7")),
             },
@@ -402,10 +402,10 @@ fn err(e: impl std::fmt::Display) -> String {
 /// pixel's fragments front to back).
 pub fn run_mlab<const M: usize>(frame: &Frame, sorted: bool) -> Result<Image, String> {
     let s = frame.stream;
-    let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M>::rows_needed(s.width, s.height).map_err(err)?];
-    let mut fb = MlabFramebuffer::<M>::new(&mut storage, s.width, s.height).map_err(err)?;
+    let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M, Paper>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = MlabFramebuffer::<M, Paper>::new(&mut storage, s.width, s.height).map_err(err)?;
     fb.clear();
-    let insert = |fb: &mut MlabFramebuffer<M>, i: usize| -> Result<(), String> {
+    let insert = |fb: &mut MlabFramebuffer<M, Paper>, i: usize| -> Result<(), String> {
         let f = &s.frags[i];
         let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
         fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)
@@ -425,8 +425,8 @@ pub fn run_mlab<const M: usize>(frame: &Frame, sorted: bool) -> Result<Image, St
 /// Hybrid Transparency with the kernel's framebuffer view, in submission order.
 pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<Image, String> {
     let s = frame.stream;
-    let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K>::rows_needed(s.width, s.height).map_err(err)?];
-    let mut fb = HybridFramebuffer::<K>::new(&mut storage, s.width, s.height).map_err(err)?;
+    let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K, Paper>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = HybridFramebuffer::<K, Paper>::new(&mut storage, s.width, s.height).map_err(err)?;
     // The tail slot of `Row::EMPTY` bytes is not `Tail::EMPTY`: clear for a new frame.
     fb.clear();
     for (i, f) in s.frags.iter().enumerate() {

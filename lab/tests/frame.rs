@@ -2,7 +2,7 @@
 //! to one thread over the whole frame, for every band height and thread count tried.
 
 use mlab::glam::{Vec3, Vec4};
-use mlab::{Background, Row, SpanFramebuffer, to_rgba8};
+use mlab::{Background, Paper, Row, SpanFramebuffer, to_rgba8};
 use oit_lab::frame::{CHUNK, Compositor, FrameMethod};
 use oit_lab::methods::{Frame, Method, Weight};
 use oit_lab::scenes::Scene;
@@ -18,8 +18,8 @@ fn pool(threads: usize) -> rayon::ThreadPool {
 /// The untiled single-threaded kernel: every fragment in submission order into one
 /// framebuffer, then the lanes resolve.
 fn mlab_sequential(s: &Stream) -> (Vec<Row>, Vec<[u8; 4]>) {
-    let mut storage = vec![Row::EMPTY; SpanFramebuffer::<4>::rows_needed(s.width, s.height).unwrap()];
-    let mut fb = SpanFramebuffer::<4>::new_cleared(&mut storage, s.width, s.height).unwrap();
+    let mut storage = vec![Row::EMPTY; SpanFramebuffer::<4, Paper>::rows_needed(s.width, s.height).unwrap()];
+    let mut fb = SpanFramebuffer::<4, Paper>::new_cleared(&mut storage, s.width, s.height).unwrap();
     for f in &s.frags {
         fb.insert(f.pixel % s.width, f.pixel / s.width, &f.to_kernel().unwrap())
             .unwrap();

@@ -1,0 +1,260 @@
+//! The two arithmetics of the kernel: the paper's round-to-nearest ([`Paper`]) and the
+//! default, unbiased one ([`Unbiased`]).
+//!
+//! Every kernel type takes the arithmetic as a type parameter that defaults to
+//! [`Unbiased`]: `BlendingArray<4>` is `BlendingArray<4, Unbiased>`, and
+//! `BlendingArray<4, Paper>` is the paper's arithmetic bit for bit. The arithmetic decides
+//! three things, nothing else (the row layout, Listing 1's sort, Listing 2's head and the
+//! resolve are the same):
+//!
+//! | | [`Paper`] | [`Unbiased`] (default) |
+//! |---|---|---|
+//! | merge products (Eq. 7-8) | `round(a * b / 255)` | `floor((a * b + d) / 255)`, `d` = [`merge_dither`] in `0..=254` |
+//! | fragment quantization | `floor(v * 255 + 0.5)` | `floor(v * 255 + u)`, `u` = [`fragment_dither`] |
+//! | HT tail | [`PaperTail`]: colors 3 x 10 bit, alpha 16, count 16 | [`Tail`]: colors 3 x 13 bit, alpha 13, count 12 |
+//!
+//! # Why
+//!
+//! Rounding a unorm8 product to nearest is exact on average for one product, but a chain of
+//! merges of faint layers stalls: `round(T * (255 - a) / 255) == T` as soon as
+//! `a * T < 127.5`, so the transmittance of a pixel crossed by many fragments of alpha
+//! `1/255` never falls below `127/255` (exact: it tends to 0), and a fog of 1000 such
+//! fragments keeps half of the background visible. [`Unbiased`] rounds down or up with
+//! probability equal to the fraction: for a dither `d` uniform on `0..=254`,
+//! `E[floor((p + d) / 255)] = p / 255` exactly, so the stored transmittance is an unbiased
+//! estimate of the exact product and does not stall. The dither is a hash of the two rows'
+//! bits (no state, no randomness source): the same rows give the same bytes on every
+//! machine, every SIMD backend and in a shader with 32-bit integers.
+//!
+//! Exactness is kept where the paper is exact (tested): merging with the empty row is the
+//! identity (`floor((255 * t + d) / 255) = t` for `d <= 254`), an opaque row stays opaque,
+//! opaque fragments converge to a z-buffer, an array with `M >= n` rows holds every fragment
+//! exactly as quantized. The colors use the complementary dither `254 - d`, which keeps
+//! `color <= 255 - T` an invariant of the merge, as it is for the paper's rounding.
+//!
+//! What the dither cannot do: when the same two rows are merged again and again (the same
+//! fragment, same depth, same color, submitted many times into a pixel whose last row does
+//! not change), the hash is the same each time and the merge is a fixed point, as with the
+//! paper's rounding. Any change of depth or color between the fragments moves it.
+//!
+//! [`PaperTail`]: crate::hybrid::PaperTail
+//! [`Tail`]: crate::hybrid::Tail
+
+use crate::fragment::Fragment;
+use crate::hybrid::{PaperTail, Tail, TailFormat};
+use crate::row::Row;
+use crate::unorm::{div255_floor, mul};
+
+/// Which arithmetic, for code that is written once for both (crate-internal).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[doc(hidden)]
+pub enum Kind {
+    /// Round to nearest, paper tail.
+    Paper,
+    /// Dithered rounding, wide tail.
+    Unbiased,
+}
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for super::Paper {}
+    impl Sealed for super::Unbiased {}
+}
+
+/// The arithmetic of the merge, of fragment quantization and of the HT tail: [`Paper`] or
+/// [`Unbiased`] (see the [module docs](self)). Sealed: the kernel's lane code implements
+/// exactly these two.
+pub trait Arithmetic:
+    sealed::Sealed + Copy + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
+{
+    /// `"paper"` or `"unbiased"`.
+    const NAME: &'static str;
+    /// Which one (used by the lane code to pick its instructions).
+    #[doc(hidden)]
+    const KIND: Kind;
+    /// The HT tail of this arithmetic.
+    type Tail: TailFormat;
+
+    /// Merge two neighbouring rows (Eq. 7-8), `front` nearer: see [`crate::mlab::merge`].
+    fn merge(front: Row, back: Row) -> Row;
+
+    /// Quantize a validated fragment into a row.
+    fn quantize(fragment: &Fragment) -> Row;
+}
+
+/// The paper's arithmetic: products rounded to nearest, fragments rounded to nearest, the
+/// paper's 3 x 10-bit tail ([`PaperTail`]). Bit-identical to the kernel before the
+/// unbiased arithmetic existed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Paper;
+
+/// The default arithmetic: dithered products and fragment quantization (unbiased on
+/// average, no transmittance stall) and a tail that does not saturate on dense content
+/// ([`Tail`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Unbiased;
+
+impl Arithmetic for Paper {
+    const NAME: &'static str = "paper";
+    const KIND: Kind = Kind::Paper;
+    type Tail = PaperTail;
+
+    /// `A = A_front + round(A_back * T_front / 255)` (saturating), `T = round(T_front * T_back / 255)`.
+    #[inline(always)]
+    fn merge(front: Row, back: Row) -> Row {
+        let [ar, ag, ab, at] = front.rgbt();
+        let [br, bg, bb, bt] = back.rgbt();
+        // `min` rather than `u8::saturating_add`: the same value, without a branch.
+        let add = |a: u8, b: u8| (a as u32 + mul(b, at) as u32).min(255) as u8;
+        Row::new([add(ar, br), add(ag, bg), add(ab, bb)], mul(at, bt), front.depth())
+    }
+
+    #[inline(always)]
+    fn quantize(fragment: &Fragment) -> Row {
+        fragment.row()
+    }
+}
+
+impl Arithmetic for Unbiased {
+    const NAME: &'static str = "unbiased";
+    const KIND: Kind = Kind::Unbiased;
+    type Tail = Tail;
+
+    /// With `d = merge_dither(front, back)`:
+    /// `T = floor((T_front * T_back + d) / 255)`,
+    /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255.
+    #[inline(always)]
+    fn merge(front: Row, back: Row) -> Row {
+        let [ar, ag, ab, at] = front.rgbt();
+        let [br, bg, bb, bt] = back.rgbt();
+        let d = merge_dither(front, back);
+        let at32 = at as u32;
+        let add = |a: u8, b: u8| (a as u32 + div255_floor(b as u32 * at32 + 254 - d)).min(255) as u8;
+        let t = div255_floor(at32 * bt as u32 + d) as u8;
+        Row::new([add(ar, br), add(ag, bg), add(ab, bb)], t, front.depth())
+    }
+
+    #[inline(always)]
+    fn quantize(fragment: &Fragment) -> Row {
+        let c = fragment.color();
+        quantize_dithered([c.x, c.y, c.z], fragment.alpha(), fragment.depth())
+    }
+}
+
+/// The multiplier of the 16-bit mix (odd, so the mix is a bijection of the folded bits).
+pub const MIX_K: u32 = 0x6a09;
+
+/// The 16-bit mix shared by both dithers: `x` folded to 16 bits and multiplied modulo 2^16
+/// (a multiplicative hash, whose high bits depend on every folded bit). A shader or a SIMD
+/// unit with 16-bit lanes gets the same bits; the dithers use only the high bits.
+#[inline(always)]
+pub const fn mix16(x: u32) -> u32 {
+    (((x ^ (x >> 16)) & 0xffff) * MIX_K) & 0xffff
+}
+
+/// The dither of a merge, in `0..=254`: a hash of all 16 bytes of the two rows.
+///
+/// ```text
+/// x = front.word0 ^ front.word1 ^ back.word0 ^ back.word1        (Row::words)
+/// s = mix16(x)                                                   (see mix16)
+/// d = (s * 255) >> 16
+/// ```
+///
+/// Over uniformly distributed `s`, each `d` in `0..=254` has probability 257/65536 or
+/// 258/65536 (one value), so `E[floor((p + d) / 255)]` is within `1/65536` of `p / 255`.
+///
+/// ```
+/// use mlab::{Row, arith::merge_dither};
+/// let d = merge_dither(Row::new([1, 2, 3], 200, 1.0), Row::new([4, 5, 6], 250, 2.0));
+/// assert!(d <= 254);
+/// ```
+#[inline(always)]
+pub const fn merge_dither(front: Row, back: Row) -> u32 {
+    let [f0, f1] = front.words();
+    let [b0, b1] = back.words();
+    (mix16(f0 ^ f1 ^ b0 ^ b1) * 255) >> 16
+}
+
+/// The dither of fragment quantization: `u = (h + 0.5) / 256` with `h` in `0..=255`, a
+/// hash of the fragment's f32 bits (`h = mix16(bits(R) ^ bits(G) ^ bits(B) ^ bits(alpha)
+/// ^ bits(depth)) >> 8`). `u` lies in `[1/512, 511/512]`, so a value that is exactly a byte
+/// (`k / 255`, up to the f32 error of `v * 255`) quantizes to that byte, and
+/// `E[floor(v * 255 + u)]` is within `1/512` of `v * 255`.
+#[inline(always)]
+pub fn fragment_dither(color: [f32; 3], alpha: f32, depth: f32) -> f32 {
+    let x = color[0].to_bits() ^ color[1].to_bits() ^ color[2].to_bits() ^ alpha.to_bits() ^ depth.to_bits();
+    ((mix16(x) >> 8) as f32 + 0.5) * (1.0 / 256.0)
+}
+
+/// A byte from a value in `[0, 1]` and a dither `u` in `(0, 1)`: `floor(v * 255 + u)` in f32
+/// (multiply, then add, each rounded; truncation).
+#[inline(always)]
+pub fn quantize_with_dither(v: f32, u: f32) -> u8 {
+    (v * 255.0 + u) as u8
+}
+
+/// The unbiased quantization of a validated fragment (premultiplied color, alpha, depth):
+/// every channel and alpha with the same dither ([`fragment_dither`]), so that a color that
+/// does not exceed alpha still gives `color byte <= 255 - T byte`.
+#[inline(always)]
+pub fn quantize_dithered(color: [f32; 3], alpha: f32, depth: f32) -> Row {
+    let u = fragment_dither(color, alpha, depth);
+    Row::new(
+        color.map(|c| quantize_with_dither(c, u)),
+        255 - quantize_with_dither(alpha, u),
+        depth,
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The reference formula of the unbiased merge, for one pair of bytes and a dither.
+    fn reference(a: u32, b: u32, d: u32) -> u32 {
+        (a * b + d) / 255
+    }
+
+    #[test]
+    fn dithered_products_are_exact_floor_for_every_pair_and_dither() {
+        for a in 0..=255u32 {
+            for b in 0..=255u32 {
+                for d in [0, 1, 127, 253, 254] {
+                    assert_eq!(div255_floor(a * b + d), reference(a, b, d), "{a} {b} {d}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn dither_is_in_range_and_nearly_uniform() {
+        let mut hist = [0u32; 255];
+        for s in 0..=0xffffu32 {
+            let d = (s * 255) >> 16;
+            hist[d as usize] += 1;
+        }
+        assert!(hist.iter().all(|&n| n == 257 || n == 258), "{hist:?}");
+        assert_eq!(hist.iter().filter(|&&n| n == 258).count(), 1);
+    }
+
+    #[test]
+    fn unbiased_merge_is_exact_where_the_paper_is() {
+        let mut x = 0x1234_5678u32;
+        for _ in 0..20_000 {
+            x = x.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let b = x.to_le_bytes();
+            let front = Row::new([b[0], b[1], b[2]], b[3], (x >> 7) as f32);
+            let back = Row::new([b[1], b[3], b[0]], b[2], (x >> 5) as f32 + 1.0);
+            // Empty row behind: identity.
+            assert_eq!(Unbiased::merge(front, Row::EMPTY), front);
+            // Opaque front: nothing behind shows.
+            let opaque = Row::new(front.color(), 0, front.depth());
+            assert_eq!(Unbiased::merge(opaque, back), opaque);
+            // Opaque back: opaque result.
+            assert_eq!(
+                Unbiased::merge(front, Row::new(back.color(), 0, 2.0)).transmittance(),
+                0
+            );
+        }
+    }
+}
