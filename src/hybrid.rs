@@ -286,10 +286,12 @@ impl TailFormat for PaperTail {
     }
 }
 
-/// Width in bits of each color sum and of the alpha sum of the default [`Tail`].
-pub const WIDE_SUM_BITS: u32 = 13;
+/// Width in bits of each color sum of the default [`Tail`].
+pub const WIDE_COLOR_BITS: u32 = 13;
+/// Width in bits of the alpha sum of the default [`Tail`].
+pub const WIDE_ALPHA_BITS: u32 = 14;
 /// Width in bits of the fragment count of the default [`Tail`].
-pub const WIDE_COUNT_BITS: u32 = 12;
+pub const WIDE_COUNT_BITS: u32 = 11;
 
 /// The default 8-byte tail of Hybrid Transparency ([`Unbiased`](crate::Unbiased)
 /// arithmetic): the same exact saturating sums as the paper's, re-split so that they do not
@@ -300,22 +302,24 @@ pub const WIDE_COUNT_BITS: u32 = 12;
 /// | 0..13 | sum of premultiplied R bytes | 8191 (32.1 in color units) |
 /// | 13..26 | sum of premultiplied G bytes | 8191 |
 /// | 26..39 | sum of premultiplied B bytes | 8191 |
-/// | 39..52 | sum of alpha bytes (`255 - T`) | 8191 (32.1 in alpha units) |
-/// | 52..64 | fragment count | 4095 |
+/// | 39..53 | sum of alpha bytes (`255 - T`) | 16383 (64.2 in alpha units) |
+/// | 53..64 | fragment count | 2047 |
 ///
 /// Units are those of the row (`1/255`), so the sums are exact and every fragment's
 /// contribution depends on that fragment alone: the tail is exactly order independent, as
-/// the paper's. Departure from the paper (3 x 10-bit colors, 16-bit alpha and count): the
-/// colors and the alpha get the same range, 8x the paper's color range. The alpha sum
-/// reaches 32.1 only where the tail's transmittance is below `e^-32`, and a count above
-/// 4095 would need 4095 fragments in one pixel's tail.
+/// the paper's. Departure from the paper (3 x 10-bit colors, 16-bit alpha and count): 8x
+/// the paper's color range, a quarter of its alpha range and 1/32 of its count range, sized
+/// on the lab's densest scenes (`lab/TAIL_SIZES.md`: up to 19.4 color units, 31.9 alpha
+/// units and 299 fragments in a tail behind 3 head rows). An alpha sum of 64 means a tail
+/// transmittance below `e^-64`; the colors (which do not exceed alpha for fragments that are
+/// not additive) saturate first only past 32 units of light behind the head.
 ///
 /// ```
 /// use mlab::{Row, Tail};
 /// let mut tail = Tail::EMPTY;
 /// tail.add(Row::new([255, 2, 3], 128, 5.0));
-/// assert_eq!(tail.to_le_u64(), 255 | 2 << 13 | 3 << 26 | 127 << 39 | 1 << 52);
-/// assert_eq!(tail.to_bytes(), [0xff, 0x40, 0x00, 0x0c, 0x80, 0x3f, 0x10, 0x00]);
+/// assert_eq!(tail.to_le_u64(), 255 | 2 << 13 | 3 << 26 | 127 << 39 | 1 << 53);
+/// assert_eq!(tail.to_bytes(), [0xff, 0x40, 0x00, 0x0c, 0x80, 0x3f, 0x20, 0x00]);
 /// ```
 #[repr(C, align(8))]
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default, Pod, Zeroable)]
@@ -326,8 +330,13 @@ pub struct Tail {
 const _: () = assert!(core::mem::size_of::<Tail>() == 8);
 const _: () = assert!(core::mem::align_of::<Tail>() == 8);
 
-const WIDE_SUM_MAX: u64 = (1 << WIDE_SUM_BITS) - 1;
+const WIDE_COLOR_MAX: u64 = (1 << WIDE_COLOR_BITS) - 1;
+const WIDE_ALPHA_MAX: u64 = (1 << WIDE_ALPHA_BITS) - 1;
 const WIDE_COUNT_MAX: u64 = (1 << WIDE_COUNT_BITS) - 1;
+/// Bit positions of the fields of [`Tail`].
+const WIDE_ALPHA_SHIFT: u32 = 3 * WIDE_COLOR_BITS;
+const WIDE_COUNT_SHIFT: u32 = WIDE_ALPHA_SHIFT + WIDE_ALPHA_BITS;
+const _: () = assert!(WIDE_COUNT_SHIFT + WIDE_COUNT_BITS == 64);
 
 impl Tail {
     /// The tail as one little-endian `u64` (layout in the [type docs](Tail)).
@@ -360,8 +369,8 @@ impl Tail {
 impl TailFormat for Tail {
     const EMPTY: Tail = Tail { bytes: [0; 8] };
     const KIND: Kind = Kind::Unbiased;
-    const COLOR_MAX: u32 = WIDE_SUM_MAX as u32;
-    const ALPHA_MAX: u32 = WIDE_SUM_MAX as u32;
+    const COLOR_MAX: u32 = WIDE_COLOR_MAX as u32;
+    const ALPHA_MAX: u32 = WIDE_ALPHA_MAX as u32;
     const COUNT_MAX: u32 = WIDE_COUNT_MAX as u32;
 
     fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> Tail {
@@ -370,35 +379,35 @@ impl TailFormat for Tail {
 
     #[inline(always)]
     fn with_sums(self, color: [u32; 3], alpha: u32, count: u32) -> Tail {
-        let s = |v: u32| (v as u64).min(WIDE_SUM_MAX);
-        let b = WIDE_SUM_BITS;
+        let s = |v: u32| (v as u64).min(WIDE_COLOR_MAX);
+        let b = WIDE_COLOR_BITS;
         Tail::from_le_u64(
             s(color[0])
                 | s(color[1]) << b
                 | s(color[2]) << (2 * b)
-                | s(alpha) << (3 * b)
-                | (count as u64).min(WIDE_COUNT_MAX) << (4 * b),
+                | (alpha as u64).min(WIDE_ALPHA_MAX) << WIDE_ALPHA_SHIFT
+                | (count as u64).min(WIDE_COUNT_MAX) << WIDE_COUNT_SHIFT,
         )
     }
 
     #[inline(always)]
     fn color_sum(self) -> [u32; 3] {
-        let b = WIDE_SUM_BITS;
+        let b = WIDE_COLOR_BITS;
         [
-            self.field(0, WIDE_SUM_MAX),
-            self.field(b, WIDE_SUM_MAX),
-            self.field(2 * b, WIDE_SUM_MAX),
+            self.field(0, WIDE_COLOR_MAX),
+            self.field(b, WIDE_COLOR_MAX),
+            self.field(2 * b, WIDE_COLOR_MAX),
         ]
     }
 
     #[inline(always)]
     fn alpha_sum(self) -> u32 {
-        self.field(3 * WIDE_SUM_BITS, WIDE_SUM_MAX)
+        self.field(WIDE_ALPHA_SHIFT, WIDE_ALPHA_MAX)
     }
 
     #[inline(always)]
     fn count(self) -> u32 {
-        self.field(4 * WIDE_SUM_BITS, WIDE_COUNT_MAX)
+        self.field(WIDE_COUNT_SHIFT, WIDE_COUNT_MAX)
     }
 }
 

@@ -471,10 +471,11 @@ impl Rows8 {
 /// Low dword masks for the fields of the wide tail.
 const BYTE_LO: u32x8 = u32x8::new([0xff, 0, 0xff, 0, 0xff, 0, 0xff, 0]);
 const SUM_LO: u32x8 = u32x8::new([0x1fff, 0, 0x1fff, 0, 0x1fff, 0, 0x1fff, 0]);
+const ALPHA_LO: u32x8 = u32x8::new([0x3fff, 0, 0x3fff, 0, 0x3fff, 0, 0x3fff, 0]);
 const ONE_LO: u32x8 = u32x8::new([1, 0, 1, 0, 1, 0, 1, 0]);
 
 /// [`Tail`](crate::Tail)`::add` for four tails in one register (each tail one `u64`:
-/// colors at bits 0, 13, 26, alpha at 39, count at 52).
+/// colors at bits 0, 13, 26, alpha at 39, count at 53).
 #[inline(always)]
 fn tail_add4_wide(tail: u32x8, row: u32x8) -> u32x8 {
     let shr = |v: u32x8, n: u64| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(v) >> n);
@@ -488,9 +489,9 @@ fn tail_add4_wide(tail: u32x8, row: u32x8) -> u32x8 {
     let sr = sat((tail & SUM_LO) + r, 8191);
     let sg = sat(((tail >> 13) & SUM_LO) + g, 8191);
     let sb = sat((shr(tail, 26) & SUM_LO) + b, 8191);
-    let sa = sat((shr(tail, 39) & SUM_LO) + a, 8191);
-    let sn = sat(shr(tail, 52) + ONE_LO, 4095);
-    let new = sr | (sg << 13) | shl(sb, 26) | shl(sa, 39) | shl(sn, 52);
+    let sa = sat((shr(tail, 39) & ALPHA_LO) + a, 16383);
+    let sn = sat(shr(tail, 53) + ONE_LO, 2047);
+    let new = sr | (sg << 13) | shl(sb, 26) | shl(sa, 39) | shl(sn, 53);
     // Invisible rows (no color, T = 255) are skipped.
     let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
     invisible.select(tail, new)
@@ -859,10 +860,14 @@ fn hybrid_resolve_regs<T: TailFormat, const K: usize>(
             (sums, w1 & u32x8::splat(0xffff), w1 >> 16)
         }
         Kind::Unbiased => {
-            // Colors at bits 0, 13, 26 (the last one across the words), alpha at 39, count at 52.
+            // Colors at bits 0, 13, 26 (the last one across the words), alpha at 39, count at 53.
             let field = u32x8::splat(0x1fff);
             let blue = (w0 >> 26) | ((w1 & u32x8::splat(0x7f)) << 6);
-            ([w0 & field, (w0 >> 13) & field, blue], (w1 >> 7) & field, w1 >> 20)
+            (
+                [w0 & field, (w0 >> 13) & field, blue],
+                (w1 >> 7) & u32x8::splat(0x3fff),
+                w1 >> 21,
+            )
         }
     };
     crate::hybrid::resolve_lanes::<f32x8>(head, sums, alpha, count)

@@ -45,26 +45,28 @@ fn paper_tail_layout_is_pinned() {
 fn tail_layout_is_pinned() {
     assert_eq!(core::mem::size_of::<Tail>(), 8);
     assert_eq!(core::mem::align_of::<Tail>(), 8);
-    // R = 0x1abc, G = 0x0155, B = 0x1001, alpha = 0x0fed, count = 0x987 as one LE u64:
-    // R | G << 13 | B << 26 | alpha << 39 | count << 52.
-    let t = Tail::from_sums([0x1abc, 0x155, 0x1001], 0xfed, 0x987);
-    assert_eq!(t.to_le_u64(), 0x9877_f6c0_042a_babc);
-    assert_eq!(t.to_bytes(), [0xbc, 0xba, 0x2a, 0x04, 0xc0, 0xf6, 0x77, 0x98]);
-    assert_eq!(t.words(), [0x042a_babc, 0x9877_f6c0]);
+    // R = 0x1abc, G = 0x0155, B = 0x1001, alpha = 0x2fed, count = 0x587 as one LE u64:
+    // R | G << 13 | B << 26 | alpha << 39 | count << 53.
+    let t = Tail::from_sums([0x1abc, 0x155, 0x1001], 0x2fed, 0x587);
+    assert_eq!(t.to_le_u64(), 0xb0f7_f6c0_042a_babc);
+    assert_eq!(t.to_bytes(), [0xbc, 0xba, 0x2a, 0x04, 0xc0, 0xf6, 0xf7, 0xb0]);
+    assert_eq!(t.words(), [0x042a_babc, 0xb0f7_f6c0]);
     assert_eq!(bytemuck::bytes_of(&t), &t.to_bytes());
     assert_eq!(Tail::EMPTY.to_bytes(), [0; 8]);
     assert_eq!(Tail::from_bytes(t.to_bytes()), t);
     assert_eq!(
         (t.color_sum(), t.alpha_sum(), t.count()),
-        ([0x1abc, 0x155, 0x1001], 0xfed, 0x987)
+        ([0x1abc, 0x155, 0x1001], 0x2fed, 0x587)
     );
-    // Fields saturate at construction: 13-bit sums, 12-bit count.
+    // Fields saturate at construction: 13-bit colors, 14-bit alpha, 11-bit count.
     assert_eq!(
         Tail::from_sums([9000, 0, 0], 1 << 20, 1 << 20).to_le_u64(),
-        0x1fff | 0x1fff << 39 | 0xfff << 52
+        0xffff_ff80_0000_1fff
     );
     assert!(Tail::from_sums([0, 0, 8191], 0, 1).saturated());
-    assert!(!Tail::from_sums([8190; 3], 8190, 4094).saturated());
+    assert!(Tail::from_sums([0; 3], 16383, 1).saturated());
+    assert!(Tail::from_sums([0; 3], 0, 2047).saturated());
+    assert!(!Tail::from_sums([8190; 3], 16382, 2046).saturated());
 }
 
 #[test]
