@@ -4,7 +4,7 @@
 //! Storage is a caller-owned `&mut [Row]`, pixel-major and row-major: pixel `(x, y)` owns
 //! the rows `[(y * width + x) * R, (y * width + x + 1) * R)` where `R` is the number of
 //! rows per pixel (`M` for MLAB, `K + 1` for Hybrid Transparency, whose last row-sized
-//! slot holds the 8-byte [`Tail`]). The storage can be handed to a GPU as bytes or
+//! slot holds the 8-byte [`Tail`](crate::Tail)). The storage can be handed to a GPU as bytes or
 //! little-endian words with [`MlabFramebuffer::as_bytes`] / [`MlabFramebuffer::as_words`]
 //! (`RG32Uint` texels).
 //!
@@ -319,7 +319,7 @@ impl<'a, const K: usize, A: Arithmetic> HybridFramebuffer<'a, K, A> {
     /// A view over `storage`, which must hold exactly `width * height * (K + 1)` rows.
     /// Contents are kept. **Storage filled with [`Row::EMPTY`] is not a cleared HT
     /// framebuffer**: the tail slots would hold an empty row's bytes, which are not an empty
-    /// [`Tail`]. Use [`new_cleared`](Self::new_cleared) (or [`clear`](Self::clear)) to start a
+    /// [`Tail`](crate::Tail). Use [`new_cleared`](Self::new_cleared) (or [`clear`](Self::clear)) to start a
     /// frame.
     pub fn new(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
         let dims = Dims { width, height };

@@ -293,7 +293,7 @@ pub const WIDE_ALPHA_BITS: u32 = 14;
 /// Width in bits of the fragment count of the default [`Tail`].
 pub const WIDE_COUNT_BITS: u32 = 11;
 
-/// The default 8-byte tail of Hybrid Transparency ([`Unbiased`](crate::Unbiased)
+/// The default 8-byte tail of Hybrid Transparency ([`Unbiased`]
 /// arithmetic): the same exact saturating sums as the paper's, re-split so that they do not
 /// saturate on dense content. Read as one little-endian `u64` (`word0 | word1 << 32`):
 ///

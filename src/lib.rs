@@ -8,7 +8,8 @@
 //! | type | what | size |
 //! |---|---|---|
 //! | [`Row`] | premultiplied RGB8 + transmittance T8 + depth f32 | 8 bytes, align 8 |
-//! | [`Tail`] | HT tail: color sums 3 x 10 bit, alpha sum 16 bit, count 16 bit | 8 bytes, align 8 |
+//! | [`Tail`] | HT tail: color sums 3 x 13 bit, alpha sum 14 bit, count 11 bit | 8 bytes, align 8 |
+//! | [`hybrid::PaperTail`] | the paper's HT tail: 3 x 10, 16, 16 bit | 8 bytes, align 8 |
 //! | [`BlendingArray<M>`] | MLAB blending array, `M >= 1` rows | `8 * M` bytes |
 //! | [`Hybrid<K>`] | HT: `K` head rows + tail | `8 * (K + 1)` bytes |
 //! | [`MlabFramebuffer`], [`HybridFramebuffer`] | views over caller-owned `&mut [Row]` | none |
@@ -16,11 +17,15 @@
 //! - [`mlab::insert`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
 //!   [`resolve_rows`] is Eq. 5 and [`Resolved::over`] Eq. 6.
 //! - Fragments are validated once ([`Fragment`], typed [`FragmentError`]) and quantized once.
-//! - The merge is exact unorm8 integer arithmetic (`round(a * b / 255)`), reproducible on
-//!   any machine and in a shader.
+//! - The merge is exact unorm8 integer arithmetic, reproducible on any machine and in a
+//!   shader, in one of two arithmetics ([`arith`]), a type parameter of every kernel type:
+//!   [`Unbiased`] (the default: dithered rounding, no transmittance stall on many faint
+//!   layers, a tail that does not saturate on dense content) or [`Paper`] (the paper's
+//!   round-to-nearest and 3 x 10-bit tail, bit for bit): `BlendingArray<4>` is
+//!   `BlendingArray<4, Unbiased>`; `BlendingArray<4, Paper>` is the paper's.
 //!
 //! ```
-//! use glam::Vec3;
+//! use mlab::glam::Vec3;
 //! use mlab::{BlendingArray, Fragment};
 //!
 //! let mut pixel = BlendingArray::<4>::new();

@@ -558,7 +558,7 @@ impl<'a, const K: usize, A: Arithmetic> HybridSpanFramebuffer<'a, K, A> {
         })
     }
 
-    /// The storage as rows (tail slots hold [`Tail`] bytes).
+    /// The storage as rows (tail slots hold [`Tail`](crate::Tail) bytes).
     pub fn as_rows(&self) -> &[Row] {
         self.rows
     }
