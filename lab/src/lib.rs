@@ -15,6 +15,7 @@
 
 pub mod bench;
 pub mod dump;
+pub mod faint;
 pub mod frame;
 pub mod methods;
 pub mod metrics;

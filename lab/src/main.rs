@@ -21,6 +21,7 @@ USAGE:
     oit-lab dump --scene NAME --output FILE [OPTIONS]
                                             write a scene's fragment stream as a dump
     oit-lab bench [OPTIONS]                 frame-level timings on every core (docs/frame.md)
+    oit-lab faint [OPTIONS]                 issue 9: faint and dense layers, both arithmetics
     oit-lab help | --help | -h              this text; `oit-lab COMMAND --help` for a command
 
 The main job writes OUT/figure.png (Figure 3 grid), OUT/figure-small.png, one PNG per image
@@ -37,7 +38,8 @@ OPTIONS:
     --size WxH        frame size (default 640x360)
     --hd              same as --size 1280x720 (millions of fragments per scene)
     --seed N          scene seed (default 1)
-    --scenes A,B,...  only these scenes (HAIR, PARTICLES, FOREST, TEAPOTS or PWRPLANT, GLASS)
+    --scenes A,B,...  only these scenes (default HAIR, PARTICLES, FOREST, TEAPOTS or PWRPLANT,
+                      GLASS; FOG and SPLATS can be named too)
     --out DIR         output folder (default out, relative to the current folder)
     --no-flip         skip the FLIP metric
     --no-png          write no PNG files
@@ -82,6 +84,28 @@ OPTIONS:
     -h, --help        this text
 ";
 
+const FAINT_HELP: &str = "\
+oit-lab faint: many faint or dense layers (issue 9). Renders every scene with MLAB 1, 2, 4, 8
+and HT at the same memory (K = 0, 1, 3, 7), each with the paper's arithmetic and with the
+unbiased one, and unsorted OVER; prints per scene PSNR on covered pixels, mean FLIP, the
+background-visibility bias (mean and max over covered pixels) and saturated HT tails, over
+several seeds (min / median / max).
+
+USAGE:
+    oit-lab faint [OPTIONS]
+
+OPTIONS:
+    --size WxH        frame size (default 320x180)
+    --seeds A,B,...   scene seeds (default 1,2,3)
+    --scenes A,B,...  only these scenes (default all seven: HAIR, PARTICLES, FOREST,
+                      TEAPOTS or PWRPLANT, GLASS, FOG, SPLATS)
+    --no-flip         skip the FLIP metric
+    --tails           print only the HT tail sums (no rendering): per scene and seed, the
+                      sums over each pixel's fragments beyond the nearest K, in units of 1/255
+    --tail-k K        head rows for --tails (default 3)
+    -h, --help        this text
+";
+
 const DUMP_HELP: &str = "\
 oit-lab dump: write a scene's fragment stream as a dump file
 
@@ -89,7 +113,7 @@ USAGE:
     oit-lab dump --scene NAME --output FILE [--size WxH] [--seed N]
 
 OPTIONS:
-    --scene NAME      HAIR, PARTICLES, FOREST, TEAPOTS (or PWRPLANT), GLASS
+    --scene NAME      HAIR, PARTICLES, FOREST, TEAPOTS (or PWRPLANT), GLASS, FOG, SPLATS
     --output FILE     where to write
     --size WxH        frame size (default 640x360)
     --seed N          scene seed (default 1)
@@ -160,7 +184,9 @@ fn parse_seed(a: &mut Args) -> Result<u64, Fail> {
 fn main() -> ExitCode {
     let mut rest: Vec<String> = std::env::args().skip(1).collect();
     let cmd = match rest.first().map(String::as_str) {
-        Some("run") | Some("evaluate") | Some("dump") | Some("bench") | Some("help") => rest.remove(0),
+        Some("run") | Some("evaluate") | Some("dump") | Some("bench") | Some("faint") | Some("help") => {
+            rest.remove(0)
+        }
         _ => "run".to_string(),
     };
     let mut args = Args { rest };
@@ -185,7 +211,12 @@ fn main() -> ExitCode {
             print!("{BENCH_HELP}");
             Ok(())
         }
+        "faint" if args.flag(&["-h", "--help"]) => {
+            print!("{FAINT_HELP}");
+            Ok(())
+        }
         "bench" => cmd_bench(args),
+        "faint" => cmd_faint(args),
         "evaluate" => cmd_evaluate(args),
         "dump" => cmd_dump(args),
         _ => cmd_run(args),
@@ -264,7 +295,7 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
             .split(',')
             .map(|n| Scene::from_name(n.trim()).ok_or_else(|| usage(format!("--scenes: unknown scene '{n}'"))))
             .collect::<Result<Vec<_>, _>>()?,
-        None => Scene::ALL.to_vec(),
+        None => Scene::MAIN.to_vec(),
     };
     let out = PathBuf::from(a.value("--out")?.unwrap_or_else(|| "out".into()));
     let with_flip = !a.flag(&["--no-flip"]);
@@ -542,6 +573,59 @@ fn cmd_bench(mut a: Args) -> Result<(), Fail> {
         println!("\nScaling plot: {}", path.display());
     }
     Ok(())
+}
+
+fn parse_scenes(a: &mut Args, default: &[Scene]) -> Result<Vec<Scene>, Fail> {
+    match a.value("--scenes")? {
+        Some(list) => list
+            .split(',')
+            .map(|n| Scene::from_name(n.trim()).ok_or_else(|| usage(format!("--scenes: unknown scene '{n}'"))))
+            .collect(),
+        None => Ok(default.to_vec()),
+    }
+}
+
+fn cmd_faint(mut a: Args) -> Result<(), Fail> {
+    use oit_lab::faint::{tail_stats, tail_table};
+    let size = match a.value("--size")? {
+        Some(s) => parse_size(&s)?,
+        None => (320, 180),
+    };
+    let seeds = parse_list::<u64>(&mut a, "--seeds")?.unwrap_or_else(|| vec![1, 2, 3]);
+    if seeds.is_empty() {
+        return Err(usage("--seeds: at least one seed"));
+    }
+    let scenes = parse_scenes(&mut a, &Scene::ALL)?;
+    let with_flip = !a.flag(&["--no-flip"]);
+    let tails = a.flag(&["--tails"]);
+    let k = parse_list::<usize>(&mut a, "--tail-k")?
+        .and_then(|v| v.first().copied())
+        .unwrap_or(3);
+    a.finish()?;
+    let start = Instant::now();
+    if tails {
+        let mut rows = Vec::new();
+        for sc in &scenes {
+            for &seed in &seeds {
+                let stream = sc.generate(size.0, size.1, seed);
+                stream
+                    .validate()
+                    .map_err(|(i, e)| runtime(format!("{}: fragment {i}: {e}", sc.name())))?;
+                let frame = Frame::new(&stream);
+                rows.push((sc.name().to_string(), seed, tail_stats(&frame, k).map_err(runtime)?));
+            }
+        }
+        println!(
+            "# oit-lab faint --tails: {}x{}, seeds {seeds:?}, K = {k}, {:.1} s\n",
+            size.0,
+            size.1,
+            start.elapsed().as_secs_f64()
+        );
+        println!("{}", tail_table(&rows, k));
+        return Ok(());
+    }
+    let _ = with_flip;
+    Err(runtime("faint: the report is not written yet; use --tails"))
 }
 
 fn cmd_dump(mut a: Args) -> Result<(), Fail> {

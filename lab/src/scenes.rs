@@ -1,4 +1,5 @@
-//! Five deterministic procedural scenes after the paper's (section 5, Figure 3).
+//! Seven deterministic procedural scenes: five after the paper's (section 5, Figure 3) and
+//! two of many faint or dense layers for issue 9 (FOG, SPLATS).
 //!
 //! Each scene is a list of primitives submitted in a fixed order; each primitive is
 //! "rasterized" by scanning its screen box and evaluating its coverage analytically at the
@@ -11,7 +12,7 @@
 
 use crate::stream::{Frag, Stream};
 
-/// The five scenes.
+/// The scenes. The discriminants seed each scene's generator: new scenes go at the end.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scene {
     /// Thousands of thin strands, drawn strand by strand, root to tip.
@@ -25,11 +26,29 @@ pub enum Scene {
     Teapots,
     /// A few layers of high-alpha tinted panels with front and back faces.
     Glass,
+    /// A volume of hundreds of faint slices (alpha 1/255 to 0.05) over a bright sky, warm
+    /// near and cool far, submitted in shuffled order.
+    Fog,
+    /// A dense cloud of soft anisotropic Gaussian splats (up to about 300 per pixel), colors
+    /// varying with depth, in random order.
+    Splats,
 }
 
 impl Scene {
     /// Every scene, in table order.
-    pub const ALL: [Scene; 5] = [
+    pub const ALL: [Scene; 7] = [
+        Scene::Hair,
+        Scene::Particles,
+        Scene::Forest,
+        Scene::Teapots,
+        Scene::Glass,
+        Scene::Fog,
+        Scene::Splats,
+    ];
+
+    /// The scenes of the main job (`oit-lab run`): the paper's five. FOG and SPLATS have
+    /// tens of millions of fragments at 640x360 and are in `oit-lab faint`.
+    pub const MAIN: [Scene; 5] = [
         Scene::Hair,
         Scene::Particles,
         Scene::Forest,
@@ -45,6 +64,8 @@ impl Scene {
             Scene::Forest => "FOREST",
             Scene::Teapots => "TEAPOTS",
             Scene::Glass => "GLASS",
+            Scene::Fog => "FOG",
+            Scene::Splats => "SPLATS",
         }
     }
 
@@ -67,6 +88,8 @@ impl Scene {
             Scene::Forest => forest(&mut r, &mut rng),
             Scene::Teapots => teapots(&mut r, &mut rng),
             Scene::Glass => glass(&mut r, &mut rng),
+            Scene::Fog => fog(&mut r, &mut rng),
+            Scene::Splats => splats(&mut r, &mut rng),
         };
         Stream {
             width,
@@ -470,4 +493,168 @@ fn glass(r: &mut Raster, rng: &mut Rng) -> [f32; 3] {
         }
     }
     [0.75, 0.72, 0.65]
+}
+
+/// FOG: a volume of faint slices over a bright sky (issue 9). Each slice is a soft
+/// superellipse `q = (dx/hx)^4 + (dy/hy)^4 < 1` with density `(1 - q)^2`, modulated by three
+/// soft puffs; its alpha runs from `1/255` at the rim to the slice's peak (0.006 to 0.05, skewed
+/// low: `0.006 + 0.044 u^2`), so
+/// every fragment's alpha is in `[1/255, 0.05]`. Color depends on depth (warm and bright near,
+/// cool and darker far) and a little on height, so compositing out of order shows. Slices are
+/// made front to back at stratified depths, then submitted in shuffled order.
+fn fog(r: &mut Raster, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let slices = FOG_SLICES;
+    let (z_near, z_far) = (4.0f32, 60.0f32);
+    struct Slice {
+        z: f32,
+        c: (f32, f32),
+        h: (f32, f32),
+        peak: f32,
+        puffs: [(f32, f32, f32); 3],
+        tint: f32,
+    }
+    let mut list: Vec<Slice> = (0..slices)
+        .map(|i| {
+            let z = z_near + (z_far - z_near) * (i as f32 + rng.f()) / slices as f32;
+            let c = (w * 0.5 + rng.range(-0.35, 0.35) * s, s * rng.range(0.35, 0.65));
+            let h = (s * rng.range(0.55, 1.15), s * rng.range(0.3, 0.55));
+            let u = rng.f();
+            let peak = 0.006 + 0.044 * u * u;
+            let puffs = [0; 3].map(|_| {
+                (
+                    c.0 + rng.range(-1.0, 1.0) * h.0,
+                    c.1 + rng.range(-1.0, 1.0) * h.1,
+                    s * rng.range(0.15, 0.4),
+                )
+            });
+            let tint = rng.range(-0.05, 0.05);
+            Slice {
+                z,
+                c,
+                h,
+                peak,
+                puffs,
+                tint,
+            }
+        })
+        .collect();
+    rng.shuffle(&mut list);
+    let amin = 1.0 / 255.0;
+    for sl in &list {
+        let k = (sl.z - z_near) / (z_far - z_near);
+        let near = [1.0, 0.86, 0.66];
+        let far = [0.36, 0.46, 0.62];
+        let base = lerp3(near, far, clamp01(k + sl.tint));
+        r.scan(
+            sl.c.0 - sl.h.0,
+            sl.c.1 - sl.h.1,
+            sl.c.0 + sl.h.0,
+            sl.c.1 + sl.h.1,
+            |px, py| {
+                let (u, v) = ((px - sl.c.0) / sl.h.0, (py - sl.c.1) / sl.h.1);
+                let (u2, v2) = (u * u, v * v);
+                let q = u2 * u2 + v2 * v2;
+                if q >= 1.0 {
+                    return None;
+                }
+                let mut puff = 0.0f32;
+                for &(x, y, rad) in &sl.puffs {
+                    let (dx, dy) = ((px - x) / rad, (py - y) / rad);
+                    let d = 1.0 - (dx * dx + dy * dy);
+                    if d > 0.0 {
+                        puff += d * d;
+                    }
+                }
+                let density = (1.0 - q) * (1.0 - q) * (0.5 + 0.5 * puff.min(1.0));
+                // Lower fog is a little darker (ground shadow), higher a little brighter.
+                let height = 0.9 + 0.2 * (1.0 - py / s);
+                Some(Shade {
+                    depth: sl.z,
+                    color: base.map(|c| c * height),
+                    alpha: amin + (sl.peak - amin) * density,
+                    light: [0.0; 3],
+                })
+            },
+        );
+    }
+    [0.92, 0.95, 1.0]
+}
+
+/// Number of FOG slices.
+const FOG_SLICES: usize = 320;
+
+/// Number of SPLATS splats.
+const SPLAT_COUNT: usize = 12_000;
+
+/// The Gaussian falloff of a splat without transcendental functions:
+/// `(1 - q/18)^9` for `q = (x/sigma)^2 + (y/sigma)^2 < 18`, 0 beyond. It is
+/// `(1 - q/(2n))^n` with `n = 9`, which tends to `exp(-q/2)` as `n` grows; with `n = 9` it
+/// is within 0.032 of `exp(-q/2)` everywhere (largest gap near `q = 3.85`, 0.115 against
+/// 0.146), and it reaches 0 exactly at 3 sigma, where 3D Gaussian Splatting cuts its splats.
+pub fn splat_falloff(q: f32) -> f32 {
+    if !(0.0..18.0).contains(&q) {
+        return 0.0;
+    }
+    let x = 1.0 - q / 18.0;
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    x4 * x4 * x
+}
+
+/// SPLATS: a dense cloud of soft anisotropic Gaussian splats, as a 3D Gaussian Splatting
+/// renderer emits them: per splat a 2D elliptical footprint, `alpha = min(0.99, opacity *
+/// falloff)` ([`splat_falloff`]), fragments below `1/255` dropped, splats in random order.
+/// Centres are drawn around six clusters (a sum of three uniforms per axis, bell-shaped)
+/// and projected with a pinhole camera (focal length 1.2 frame heights); footprints shrink
+/// with depth. Opacities are skewed low (`0.02 + 0.93 u^2`). Color is a depth gradient (warm
+/// near, blue far) (three quarters) mixed with a per-cluster hue (a quarter) and a per-splat jitter of
+/// +-0.05.
+fn splats(r: &mut Raster, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let focal = 1.2 * s;
+    let (z_near, z_far) = (3.0f32, 7.0f32);
+    let clusters: Vec<([f32; 3], [f32; 3], [f32; 3])> = (0..6)
+        .map(|_| {
+            let c = [rng.range(-1.5, 1.5), rng.range(-0.8, 0.8), rng.range(3.6, 6.4)];
+            let rad = [rng.range(0.5, 1.1), rng.range(0.4, 0.8), rng.range(0.6, 1.2)];
+            let hue = PALETTE[rng.below(PALETTE.len())];
+            (c, rad, hue)
+        })
+        .collect();
+    let bell = |rng: &mut Rng| (rng.f() + rng.f() + rng.f() - 1.5) / 1.5;
+    for _ in 0..SPLAT_COUNT {
+        let (c, rad, hue) = clusters[rng.below(clusters.len())];
+        let p = [0, 1, 2].map(|i| c[i] + rad[i] * bell(rng));
+        let z = p[2].clamp(z_near, z_far);
+        let (sx, sy) = (w * 0.5 + focal * p[0] / z, s * 0.5 + focal * p[1] / z);
+        let major = rng.range(0.015, 0.06);
+        let minor = major * rng.range(0.25, 1.0);
+        // Screen sigmas, at least 0.3 px (a splat smaller than a pixel still covers its centre
+        // pixel, as the screen-space dilation of 3D Gaussian Splatting ensures).
+        let (sa, sb) = ((focal * major / z).max(0.3), (focal * minor / z).max(0.3));
+        let (ax, ay) = rng.unit2();
+        let opacity = {
+            let u = rng.f();
+            0.02 + 0.93 * u * u
+        };
+        // Warm at z = 3.5, blue at z = 6 (most of the cloud lies in between).
+        let k = clamp01((z - 3.5) / 2.5);
+        let depth_color = lerp3([0.98, 0.62, 0.3], [0.2, 0.4, 0.95], k);
+        let jitter = [0; 3].map(|_| rng.range(-0.05, 0.05));
+        let color = [0, 1, 2].map(|i| clamp01(0.75 * depth_color[i] + 0.25 * hue[i] + jitter[i]));
+        let ext = 3.0 * sa.max(sb) + 1.0;
+        r.scan(sx - ext, sy - ext, sx + ext, sy + ext, |px, py| {
+            let (dx, dy) = (px - sx, py - sy);
+            let (u, v) = ((dx * ax + dy * ay) / sa, (dy * ax - dx * ay) / sb);
+            let alpha = (opacity * splat_falloff(u * u + v * v)).min(0.99);
+            (alpha >= 1.0 / 255.0).then_some(Shade {
+                depth: z,
+                color,
+                alpha,
+                light: [0.0; 3],
+            })
+        });
+    }
+    [0.9, 0.9, 0.92]
 }

@@ -9,12 +9,14 @@ const H: u32 = 36;
 
 /// Stream hashes at 64x36, seed 1. A change here means every number in docs/quality.md
 /// must be regenerated.
-const PINNED: [(Scene, u64); 5] = [
+const PINNED: [(Scene, u64); 7] = [
     (Scene::Hair, 0x30c954954e504741),
     (Scene::Particles, 0x3e95706a56b8704f),
     (Scene::Forest, 0x99975b67b8d53ec4),
     (Scene::Teapots, 0x9c1633910248c6f5),
     (Scene::Glass, 0x760e1d1085a9dd51),
+    (Scene::Fog, 0x62efd6e35e8790a4),
+    (Scene::Splats, 0x28021c03643ef03c),
 ];
 
 #[test]
@@ -48,6 +50,86 @@ fn scene_names_parse() {
     }
     assert_eq!(Scene::from_name("pwrplant"), Some(Scene::Teapots));
     assert_eq!(Scene::from_name("nope"), None);
+}
+
+/// Fragments per pixel: (covered pixels, mean over them, max).
+fn per_pixel(s: &Stream) -> (usize, f64, usize) {
+    let mut n = vec![0usize; s.pixels()];
+    for f in &s.frags {
+        n[f.pixel as usize] += 1;
+    }
+    let covered = n.iter().filter(|&&c| c > 0).count();
+    let max = n.iter().copied().max().unwrap_or(0);
+    (covered, n.iter().sum::<usize>() as f64 / covered.max(1) as f64, max)
+}
+
+/// Straight color (premultiplied / alpha) of red and blue, averaged over the fragments with
+/// depth in `[lo, hi)`.
+fn mean_straight(s: &Stream, lo: f32, hi: f32) -> (f32, f32) {
+    let sel: Vec<_> = s.frags.iter().filter(|f| f.depth >= lo && f.depth < hi).collect();
+    let n = sel.len().max(1) as f32;
+    (
+        sel.iter().map(|f| f.color[0] / f.alpha).sum::<f32>() / n,
+        sel.iter().map(|f| f.color[2] / f.alpha).sum::<f32>() / n,
+    )
+}
+
+#[test]
+fn fog_is_hundreds_of_faint_layers_warm_near_cool_far() {
+    let s = Scene::Fog.generate(96, 54, 1);
+    for f in &s.frags {
+        assert!(
+            (1.0 / 255.0..=0.05).contains(&f.alpha),
+            "alpha {} out of [1/255, 0.05]",
+            f.alpha
+        );
+    }
+    let (covered, mean, max) = per_pixel(&s);
+    assert!(covered > 0 && mean >= 100.0 && max >= 200, "{covered} {mean} {max}");
+    let (near_r, near_b) = mean_straight(&s, 0.0, 15.0);
+    let (far_r, far_b) = mean_straight(&s, 45.0, 100.0);
+    assert!(
+        near_r - far_r > 0.3 && near_r > near_b && far_b > far_r,
+        "near {near_r} {near_b} far {far_r} {far_b}"
+    );
+    // Submitted in shuffled order, not front to back or back to front.
+    let z: Vec<f32> = s.frags.iter().filter(|f| f.pixel == 0).map(|f| f.depth).collect();
+    assert!(z.windows(2).any(|w| w[0] < w[1]) && z.windows(2).any(|w| w[0] > w[1]));
+}
+
+#[test]
+fn splats_are_dense_soft_and_unsorted() {
+    let s = Scene::Splats.generate(160, 90, 1);
+    for f in &s.frags {
+        assert!((1.0 / 255.0..=0.99).contains(&f.alpha), "alpha {}", f.alpha);
+    }
+    let (covered, mean, max) = per_pixel(&s);
+    assert!((200..=400).contains(&max) && mean >= 20.0, "{covered} {mean} {max}");
+    let (near_r, near_b) = mean_straight(&s, 0.0, 4.0);
+    let (far_r, far_b) = mean_straight(&s, 5.0, 100.0);
+    assert!(
+        near_r > far_r + 0.1 && far_b > near_b + 0.1,
+        "near {near_r} {near_b} far {far_r} {far_b}"
+    );
+}
+
+#[test]
+fn splat_falloff_is_a_polynomial_gaussian_cut_at_three_sigma() {
+    use oit_lab::scenes::splat_falloff;
+    assert_eq!(splat_falloff(0.0), 1.0);
+    // (1 - 9/18)^9 = 2^-9, exact in f32.
+    assert_eq!(splat_falloff(9.0), 1.0 / 512.0);
+    assert_eq!(splat_falloff(18.0), 0.0);
+    assert_eq!(splat_falloff(100.0), 0.0);
+    assert_eq!(splat_falloff(-1.0), 0.0);
+    assert_eq!(splat_falloff(f32::NAN), 0.0);
+    // The documented bound against exp(-q/2) (exp only here, in the test).
+    let mut worst = 0.0f64;
+    for i in 0..=18_000 {
+        let q = i as f64 / 1000.0;
+        worst = worst.max((splat_falloff(q as f32) as f64 - (-q / 2.0).exp()).abs());
+    }
+    assert!(worst < 0.032 && worst > 0.03, "largest gap {worst}");
 }
 
 fn sample() -> Stream {
