@@ -2,7 +2,11 @@
 //! pixel's fragments beyond the nearest `K`), fragments per covered pixel, and the report of
 //! `oit-lab faint` (MLAB and HT at equal memory, both arithmetics, against unsorted OVER).
 
-use crate::methods::Frame;
+use crate::methods::{Arith, Frame, Image, Method, hybrid_with};
+use crate::metrics::{Covered, Quality, compare, compare_covered};
+use crate::scenes::Scene;
+use crate::stream::Stream;
+use std::sync::Mutex;
 
 /// Fragments per covered pixel (a pixel is covered when it has at least one fragment).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -107,7 +111,15 @@ pub const TAIL_FIELDS: [&str; 5] = ["R", "G", "B", "alpha", "count"];
 pub fn tail_stats(frame: &Frame, k: usize) -> Result<TailStats, String> {
     let sums = tail_sums(frame, k)?;
     let covered: Vec<usize> = (0..sums.len()).filter(|&p| !frame.bins.of(p).is_empty()).collect();
-    let get = |t: &TailSums, i: usize| if i < 3 { t.color[i] } else if i == 3 { t.alpha } else { t.count };
+    let get = |t: &TailSums, i: usize| {
+        if i < 3 {
+            t.color[i]
+        } else if i == 3 {
+            t.alpha
+        } else {
+            t.count
+        }
+    };
     let fields = std::array::from_fn(|i| {
         let mut v: Vec<u64> = covered.iter().map(|&p| get(&sums[p], i)).collect();
         [quantile(&mut v, 0.99), quantile(&mut v, 0.999), quantile(&mut v, 1.0)]
@@ -143,6 +155,253 @@ pub fn tail_table(rows: &[(String, u64, TailStats)], k: usize) -> String {
         }
         let pct = 100.0 * t.paper_saturated as f64 / t.depth.covered.max(1) as f64;
         s += &format!(" {} px ({pct:.1} %) |\n", t.paper_saturated);
+    }
+    s
+}
+
+/// The methods of the report, by memory: unsorted OVER (8 B), then for `M` = 1, 2, 4, 8 MLAB
+/// `M` and HT `K = M - 1` (both `8 M` bytes per pixel), each with the paper's arithmetic and
+/// the unbiased one.
+pub fn methods() -> Vec<Method> {
+    let mut v = vec![Method::Over];
+    for m in [1usize, 2, 4, 8] {
+        for a in Arith::ALL {
+            v.push(Method::MlabWith(m, a));
+        }
+        for a in Arith::ALL {
+            v.push(Method::HybridWith(m - 1, a));
+        }
+    }
+    v
+}
+
+/// One method on one stream.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measure {
+    /// The method.
+    pub method: Method,
+    /// Memory per pixel in bytes.
+    pub bytes: f64,
+    /// Whole-image metrics (PSNR over every pixel; mean FLIP of the whole image).
+    pub quality: Quality,
+    /// Metrics over the covered pixels.
+    pub covered: Covered,
+    /// HT only: pixels whose tail has a field at its maximum.
+    pub saturated: Option<usize>,
+}
+
+/// Every method of a report on one scene and seed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneRun {
+    /// The scene.
+    pub scene: Scene,
+    /// Its seed.
+    pub seed: u64,
+    /// Number of fragments.
+    pub fragments: usize,
+    /// Fragments per covered pixel.
+    pub depth: Depth,
+    /// One entry per method, in the order asked.
+    pub measures: Vec<Measure>,
+}
+
+/// Render `stream` with the reference and `methods` (on all cores: the kernel methods run
+/// single-threaded, so methods run side by side) and measure each against the reference.
+pub fn run_stream(
+    scene: Scene,
+    seed: u64,
+    stream: &Stream,
+    methods: &[Method],
+    with_flip: bool,
+) -> Result<SceneRun, String> {
+    stream
+        .validate()
+        .map_err(|(i, e)| format!("{}: fragment {i}: {e}", scene.name()))?;
+    let frame = Frame::new(stream);
+    let reference = Method::Reference.render(&frame)?;
+    let covered: Vec<bool> = frame.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
+    let queue = Mutex::new((0..methods.len()).rev().collect::<Vec<_>>());
+    let results = Mutex::new(vec![None; methods.len()]);
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
+    std::thread::scope(|s| {
+        for _ in 0..threads.min(methods.len()) {
+            s.spawn(|| {
+                while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
+                    let m = methods[i];
+                    let r = measure(&frame, &reference, &covered, m, with_flip);
+                    if let Ok(mut out) = results.lock() {
+                        out[i] = Some(r);
+                    }
+                }
+            });
+        }
+    });
+    let results = results
+        .into_inner()
+        .map_err(|_| "a measuring thread failed".to_string())?;
+    let mut measures = Vec::with_capacity(methods.len());
+    for r in results {
+        measures.push(r.ok_or("a measuring thread failed")??);
+    }
+    Ok(SceneRun {
+        scene,
+        seed,
+        fragments: stream.frags.len(),
+        depth: depth(&frame),
+        measures,
+    })
+}
+
+fn measure(frame: &Frame, reference: &Image, covered: &[bool], m: Method, with_flip: bool) -> Result<Measure, String> {
+    let (image, saturated) = match m {
+        Method::HybridWith(k, a) => hybrid_with(k, a, frame).map(|(i, s)| (i, Some(s)))?,
+        _ => (m.render(frame)?, None),
+    };
+    Ok(Measure {
+        method: m,
+        bytes: m.bytes_per_pixel(frame),
+        quality: compare(reference, &image, with_flip),
+        covered: compare_covered(reference, &image, covered),
+        saturated,
+    })
+}
+
+/// `median [min, max]` of `values` with `digits` decimals (`+` sign when `signed`); just the
+/// value when there is one; `-` when none. The median of an even count is the mean of the
+/// middle two. Infinite values print as `inf`.
+pub fn spread(values: &[f64], digits: usize, signed: bool) -> String {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return "-".into();
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    let median = if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    };
+    let f = |x: f64| {
+        if x.is_infinite() {
+            if x > 0.0 { "inf".to_string() } else { "-inf".to_string() }
+        } else if signed {
+            format!("{x:+.digits$}")
+        } else {
+            format!("{x:.digits$}")
+        }
+    };
+    if n == 1 {
+        f(median)
+    } else {
+        format!("{} [{}, {}]", f(median), f(v[0]), f(v[n - 1]))
+    }
+}
+
+/// The value of largest magnitude (0 for none).
+fn worst(values: impl IntoIterator<Item = f64>) -> f64 {
+    values
+        .into_iter()
+        .fold(0.0, |w, x| if x.abs() > f64::abs(w) { x } else { w })
+}
+
+/// Runs of one scene over several seeds, each with the same methods in the same order.
+fn by_scene(runs: &[SceneRun]) -> Vec<(Scene, Vec<&SceneRun>)> {
+    let mut out: Vec<(Scene, Vec<&SceneRun>)> = Vec::new();
+    for r in runs {
+        match out.iter_mut().find(|(s, _)| *s == r.scene) {
+            Some((_, v)) => v.push(r),
+            None => out.push((r.scene, vec![r])),
+        }
+    }
+    out
+}
+
+fn scene_label(runs: &[&SceneRun]) -> String {
+    let means: Vec<f64> = runs.iter().map(|r| r.depth.mean).collect();
+    let max = runs.iter().map(|r| r.depth.max).max().unwrap_or(0);
+    format!(
+        "{} ({} per covered px, max {max})",
+        runs.first().map_or("?", |r| r.scene.name()),
+        spread(&means, 1, false)
+    )
+}
+
+/// The full table: per scene (fragments per covered pixel: mean over seeds as median [min,
+/// max], and the largest count), per method: PSNR on covered pixels, whole-image PSNR, mean
+/// FLIP, visibility bias (mean over covered pixels; worst pixel over every seed), saturated
+/// HT tails (pixels, share of the covered pixels).
+pub fn full_table(runs: &[SceneRun]) -> String {
+    let mut s = String::from(
+        "| scene | method | B/px | PSNR covered dB | PSNR dB | mean FLIP | vis bias mean | vis bias worst | saturated tails |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for (_, rs) in by_scene(runs) {
+        let label = scene_label(&rs);
+        let Some(first) = rs.first() else { continue };
+        for (i, m) in first.measures.iter().enumerate() {
+            let col = |f: &dyn Fn(&Measure) -> f64| -> Vec<f64> {
+                rs.iter().filter_map(|r| r.measures.get(i)).map(f).collect()
+            };
+            let sat = match m.saturated {
+                Some(_) => {
+                    let px = col(&|x| x.saturated.unwrap_or(0) as f64);
+                    let pct = col(&|x| 100.0 * x.saturated.unwrap_or(0) as f64 / x.covered.pixels.max(1) as f64);
+                    format!("{} px ({} %)", spread(&px, 0, false), spread(&pct, 1, false))
+                }
+                None => "-".into(),
+            };
+            s += &format!(
+                "| {label} | {} | {:.0} | {} | {} | {} | {} | {:+.4} | {sat} |\n",
+                m.method.name(),
+                m.bytes,
+                spread(&col(&|x| x.covered.psnr), 1, false),
+                spread(&col(&|x| x.quality.psnr), 1, false),
+                spread(&col(&|x| x.quality.flip.unwrap_or(f64::NAN)), 3, false),
+                spread(&col(&|x| x.covered.vis_bias), 4, true),
+                worst(col(&|x| x.covered.vis_worst)),
+            );
+        }
+    }
+    s
+}
+
+/// The headline: per scene, PSNR on covered pixels and mean FLIP (median [min, max] over
+/// seeds) of unsorted OVER, MLAB 4 and HT 3 (32 B/px), each arithmetic.
+pub fn headline_table(runs: &[SceneRun]) -> String {
+    let cols: Vec<Method> = std::iter::once(Method::Over)
+        .chain(Arith::ALL.map(|a| Method::MlabWith(4, a)))
+        .chain(Arith::ALL.map(|a| Method::HybridWith(3, a)))
+        .collect();
+    let mut s = String::from("| scene | frags / covered px (mean; max) |");
+    for m in &cols {
+        s += &format!(" {} |", m.name());
+    }
+    s += "\n|---|---:|";
+    s += &"---:|".repeat(cols.len());
+    s += "\n";
+    for (scene, rs) in by_scene(runs) {
+        let means: Vec<f64> = rs.iter().map(|r| r.depth.mean).collect();
+        let max = rs.iter().map(|r| r.depth.max).max().unwrap_or(0);
+        s += &format!("| {} | {}; {max} |", scene.name(), spread(&means, 1, false));
+        for m in &cols {
+            let pick = |f: &dyn Fn(&Measure) -> f64| -> Vec<f64> {
+                rs.iter()
+                    .filter_map(|r| r.measures.iter().find(|x| x.method == *m))
+                    .map(f)
+                    .collect()
+            };
+            let psnr = pick(&|x| x.covered.psnr);
+            if psnr.is_empty() {
+                s += " - |";
+                continue;
+            }
+            s += &format!(
+                " {} dB / {} |",
+                spread(&psnr, 1, false),
+                spread(&pick(&|x| x.quality.flip.unwrap_or(f64::NAN)), 3, false)
+            );
+        }
+        s += "\n";
     }
     s
 }

@@ -1,11 +1,14 @@
 //! oit-lab: how close to the exact image is MLAB with `M` rows on a kind of scene, and what
 //! do the other order-independent transparency methods give for the same memory?
 //!
-//! - [`scenes`]: five deterministic procedural scenes emitting fragment streams in
+//! - [`scenes`]: seven deterministic procedural scenes emitting fragment streams in
 //!   submission order ([`stream`]).
 //! - [`methods`]: the exact A-buffer reference and every method as a compositor over the
 //!   same stream (MLAB and HT from the `mlab` kernel).
-//! - [`metrics`]: RMSE, PSNR, max error, FLIP, background visibility bias.
+//! - [`metrics`]: RMSE, PSNR, max error, FLIP, background visibility bias; PSNR and
+//!   visibility bias over covered pixels.
+//! - [`faint`]: `oit-lab faint` (issue 9): many faint or dense layers, both kernel
+//!   arithmetics, HT tail sums and saturation.
 //! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.
 //! - [`report`]: the whole evaluation of one stream.
 //! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.

@@ -18,6 +18,7 @@
 use crate::stream::{Bins, Stream};
 use mlab::glam::Vec3;
 use mlab::half::f16;
+use mlab::hybrid::{TAIL_ALPHA_MAX, TAIL_COLOR_MAX, TAIL_COUNT_MAX};
 use mlab::lanes::{self, HybridSpan, LANES, ResolvedLanes};
 use mlab::{HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row};
 
@@ -145,6 +146,34 @@ impl Weight {
 /// UNDER blending stops taking fragments once the transmittance is below this.
 pub const UNDER_THRESHOLD: f32 = 0.01;
 
+/// The kernel's arithmetic (issue 9): how MLAB's merge rounds its unorm8 products, how a
+/// fragment is quantized to a row, and the HT tail's layout. The lab selects it in one place,
+/// [`mlab_with`] and [`hybrid_with`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Arith {
+    /// The paper's: products and fragments rounded to nearest, the 3 x 10-bit tail.
+    Paper,
+    /// The unbiased one: dithered rounding, a tail that does not saturate on dense content.
+    Unbiased,
+}
+
+impl Arith {
+    /// Both, paper first.
+    pub const ALL: [Arith; 2] = [Arith::Paper, Arith::Unbiased];
+
+    /// `"paper"` or `"unbiased"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Arith::Paper => "paper",
+            Arith::Unbiased => "unbiased",
+        }
+    }
+}
+
+/// Whether [`Arith`] reaches the kernel's two arithmetics, for reports.
+pub const ARITH_STATUS: &str = "not wired yet: the kernel has one arithmetic (the paper's), and \
+     both `paper` and `unbiased` rows run it";
+
 /// MLAB row counts the lab can run (const generics are instantiated for these).
 pub const MLAB_SIZES: [usize; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 12, 16];
 /// HT head sizes the lab can run.
@@ -163,6 +192,11 @@ pub enum Method {
     MlabSorted(usize),
     /// Hybrid Transparency (kernel, scalar) with `K` head rows and a tail.
     Hybrid(usize),
+    /// MLAB (kernel, scalar) with `M` rows and the given arithmetic ([`Method::Mlab`] is the
+    /// kernel's default arithmetic).
+    MlabWith(usize, Arith),
+    /// HT (kernel, scalar) with `K` head rows and the given arithmetic (its tail included).
+    HybridWith(usize, Arith),
     /// MLAB with `M` rows through the kernel's 8-pixel lanes (`mlab::lanes`); must give the
     /// same image as [`Method::Mlab`] bit for bit.
     MlabLanes(usize),
@@ -215,6 +249,8 @@ impl Method {
             Method::MlabLanes(m) => format!("MLAB {m} lanes"),
             Method::HybridLanes(k) => format!("HT {k} lanes"),
             Method::Hybrid(k) => format!("HT {k}"),
+            Method::MlabWith(m, a) => format!("MLAB {m} {}", a.name()),
+            Method::HybridWith(k, a) => format!("HT {k} {}", a.name()),
             Method::Over => "OVER unsorted".into(),
             Method::Under => "UNDER sorted".into(),
             Method::Wboit(w) => w.label().into(),
@@ -237,9 +273,8 @@ impl Method {
     pub fn bytes_per_pixel(self, frame: &Frame) -> f64 {
         match self {
             Method::Reference => 4.0 + 12.0 * frame.stream.frags.len() as f64 / frame.stream.pixels().max(1) as f64,
-            Method::Mlab(m) | Method::MlabSorted(m) | Method::MlabLanes(m) => 8.0 * m as f64,
-            Method::HybridLanes(k) => 8.0 * (k + 1) as f64,
-            Method::Hybrid(k) => 8.0 * (k + 1) as f64,
+            Method::Mlab(m) | Method::MlabSorted(m) | Method::MlabLanes(m) | Method::MlabWith(m, _) => 8.0 * m as f64,
+            Method::Hybrid(k) | Method::HybridLanes(k) | Method::HybridWith(k, _) => 8.0 * (k + 1) as f64,
             Method::Over | Method::Under | Method::Meshkin => 8.0,
             Method::Wboit(_) => 9.0,
             Method::BavoilMyers => 12.0,
@@ -307,7 +342,9 @@ impl Method {
                 ),
                 _ => Err(format!("HT {k} lanes: supported head sizes are 0, 1, 3, 7")),
             },
-            Method::Hybrid(k) => hybrid_dyn(k, frame),
+            Method::Hybrid(k) => hybrid_dyn(k, frame).map(|(image, _)| image),
+            Method::MlabWith(m, a) => mlab_with(m, a, frame),
+            Method::HybridWith(k, a) => hybrid_with(k, a, frame).map(|(image, _)| image),
             Method::Over => Ok(over(frame)),
             Method::Under => Ok(under(frame)),
             Method::Wboit(w) => Ok(wboit(frame, w)),
@@ -422,8 +459,9 @@ pub fn run_mlab<const M: usize>(frame: &Frame, sorted: bool) -> Result<Image, St
     kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
 }
 
-/// Hybrid Transparency with the kernel's framebuffer view, in submission order.
-pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<Image, String> {
+/// Hybrid Transparency with the kernel's framebuffer view, in submission order; also the
+/// number of pixels whose tail has a field at its maximum (saturated).
+pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<(Image, usize), String> {
     let s = frame.stream;
     let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K, Paper>::rows_needed(s.width, s.height).map_err(err)?];
     let mut fb = HybridFramebuffer::<K, Paper>::new(&mut storage, s.width, s.height).map_err(err)?;
@@ -433,7 +471,17 @@ pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<Image, String> {
         let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
         fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;
     }
-    kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
+    let mut saturated = 0;
+    for y in 0..s.height {
+        for x in 0..s.width {
+            let t = fb.pixel(x, y).map_err(err)?.1;
+            let full = t.color_sum().iter().any(|&c| c >= TAIL_COLOR_MAX)
+                || t.alpha_sum() >= TAIL_ALPHA_MAX
+                || t.count() >= TAIL_COUNT_MAX;
+            saturated += usize::from(full);
+        }
+    }
+    Ok((kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))?, saturated))
 }
 
 /// A kernel through its 8-pixel lanes: the frame is cut into spans of 8 pixels of a row;
@@ -502,7 +550,24 @@ fn mlab_dyn(m: usize, frame: &Frame, sorted: bool) -> Result<Image, String> {
     }
 }
 
-fn hybrid_dyn(k: usize, frame: &Frame) -> Result<Image, String> {
+/// MLAB `m` with arithmetic `arith`, in submission order: the one place where the lab
+/// picks the kernel's arithmetic for MLAB. (Until the kernel offers both, both map to the
+/// kernel as it is, which is the paper's arithmetic.)
+pub fn mlab_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+    match arith {
+        Arith::Paper | Arith::Unbiased => mlab_dyn(m, frame, false),
+    }
+}
+
+/// HT `k` with arithmetic `arith`: the image and the number of pixels with a saturated
+/// tail. The one place where the lab picks the kernel's arithmetic for HT.
+pub fn hybrid_with(k: usize, arith: Arith, frame: &Frame) -> Result<(Image, usize), String> {
+    match arith {
+        Arith::Paper | Arith::Unbiased => hybrid_dyn(k, frame),
+    }
+}
+
+fn hybrid_dyn(k: usize, frame: &Frame) -> Result<(Image, usize), String> {
     match k {
         0 => run_hybrid::<0>(frame),
         1 => run_hybrid::<1>(frame),

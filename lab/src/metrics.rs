@@ -3,7 +3,8 @@
 //! Color metrics are computed on what a display shows: linear RGB clamped to `[0, 1]`
 //! (additive light above 1 saturates). FLIP (NVIDIA's perceptual difference, LDR variant,
 //! through the `nv-flip` crate) takes both images sRGB-encoded to 8 bits, at the default
-//! 67 pixels per degree.
+//! 67 pixels per degree. [`compare_covered`] restricts the error and the visibility bias to
+//! the pixels the reference covers.
 
 use crate::methods::Image;
 
@@ -85,4 +86,60 @@ pub fn flip_mean(reference: &Image, test: &Image) -> f64 {
     let t = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &to_srgb8(test));
     let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
     nv_flip::FlipPool::from_image(&err).mean() as f64
+}
+
+/// Metrics over the covered pixels only (pixels where the reference has at least one
+/// fragment): what a transparency method can get wrong. Uncovered pixels show the
+/// background in every method and would dilute the whole-image PSNR.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Covered {
+    /// Number of covered pixels.
+    pub pixels: usize,
+    /// RMSE over the covered pixels and their channels (linear, clamped to `[0, 1]`).
+    pub rmse: f64,
+    /// `20 log10(1 / rmse)` in dB (infinite when they agree exactly, or no pixel is covered).
+    pub psnr: f64,
+    /// Mean over covered pixels of `vis(method) - vis(reference)`, where `vis(reference)` is
+    /// the exact product of `1 - alpha` over the pixel's fragments: positive means the
+    /// background shows through too much. 0 when no pixel is covered.
+    pub vis_bias: f64,
+    /// The signed `vis(method) - vis(reference)` of largest magnitude over covered pixels
+    /// (the first one found on ties; 0 when no pixel is covered).
+    pub vis_worst: f64,
+}
+
+/// [`Covered`] metrics of `test` against `reference` (same size) over the pixels where
+/// `covered` is true (`covered` has one entry per pixel).
+pub fn compare_covered(reference: &Image, test: &Image, covered: &[bool]) -> Covered {
+    assert_eq!((reference.width, reference.height), (test.width, test.height));
+    assert_eq!(covered.len(), reference.rgb.len());
+    let (mut pixels, mut se, mut vb, mut worst) = (0usize, 0.0f64, 0.0f64, 0.0f64);
+    for p in (0..covered.len()).filter(|&p| covered[p]) {
+        pixels += 1;
+        for k in 0..3 {
+            let d = display(reference.rgb[p][k]) - display(test.rgb[p][k]);
+            se += d * d;
+        }
+        let v = test.vis[p] as f64 - reference.vis[p] as f64;
+        vb += v;
+        if v.abs() > worst.abs() {
+            worst = v;
+        }
+    }
+    let rmse = if pixels > 0 {
+        (se / (3 * pixels) as f64).sqrt()
+    } else {
+        0.0
+    };
+    Covered {
+        pixels,
+        rmse,
+        psnr: if rmse > 0.0 {
+            20.0 * (1.0 / rmse).log10()
+        } else {
+            f64::INFINITY
+        },
+        vis_bias: if pixels > 0 { vb / pixels as f64 } else { 0.0 },
+        vis_worst: worst,
+    }
 }

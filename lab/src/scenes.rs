@@ -543,8 +543,8 @@ fn fog(r: &mut Raster, rng: &mut Rng) -> [f32; 3] {
     let amin = 1.0 / 255.0;
     for sl in &list {
         let k = (sl.z - z_near) / (z_far - z_near);
-        let near = [1.0, 0.86, 0.66];
-        let far = [0.36, 0.46, 0.62];
+        let near = [1.0, 0.9, 0.75];
+        let far = [0.55, 0.62, 0.75];
         let base = lerp3(near, far, clamp01(k + sl.tint));
         r.scan(
             sl.c.0 - sl.h.0,

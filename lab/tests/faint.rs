@@ -2,8 +2,9 @@
 //! kernel and hand-computed cases.
 
 use mlab::{HybridFramebuffer, Row, Tail};
-use oit_lab::faint::{TailSums, depth, quantile, tail_sums};
-use oit_lab::methods::Frame;
+use oit_lab::faint::{TailSums, depth, quantile, run_stream, spread, tail_sums};
+use oit_lab::methods::{Arith, Frame, Image, Method, hybrid_with};
+use oit_lab::metrics::{compare, compare_covered};
 use oit_lab::scenes::Scene;
 use oit_lab::stream::{Frag, Stream};
 
@@ -95,8 +96,7 @@ fn tail_sums_equal_the_kernel_tail_where_it_does_not_saturate() {
             fb.insert(x.pixel % w, x.pixel / w, &x.to_kernel().unwrap()).unwrap();
         }
         let mut saturated = 0;
-        for p in 0..s.pixels() {
-            let t = sums[p];
+        for (p, &t) in sums.iter().enumerate() {
             let want = Tail::from_sums(
                 t.color.map(|c| c.min(u32::MAX as u64) as u32),
                 t.alpha.min(u32::MAX as u64) as u32,
@@ -122,4 +122,140 @@ fn quantile_is_nearest_rank() {
     assert_eq!(quantile(&mut v, 1.0), 5);
     assert_eq!(quantile(&mut v, f64::NAN), 5);
     assert_eq!(quantile(&mut [], 0.5), 0);
+}
+
+fn image(rgb: Vec<[f32; 3]>, vis: Vec<f32>) -> Image {
+    Image {
+        width: rgb.len() as u32,
+        height: 1,
+        rgb,
+        vis,
+    }
+}
+
+#[test]
+fn covered_metrics_by_hand() {
+    // Pixel 0 covered, every channel off by 0.1; pixel 1 covered, exact color; pixel 2 not
+    // covered, off by 0.5 (ignored). Covered: 3 errors of 0.1 over 6 values:
+    // RMSE = sqrt(0.03 / 6), PSNR = 20 log10(1 / RMSE) = 10 log10(200) = 23.0103 dB.
+    let reference = image(vec![[0.5; 3], [0.2; 3], [0.0; 3]], vec![0.5, 0.25, 1.0]);
+    let test = image(vec![[0.6; 3], [0.2; 3], [0.5; 3]], vec![0.75, 0.125, 0.0]);
+    let c = compare_covered(&reference, &test, &[true, true, false]);
+    assert_eq!(c.pixels, 2);
+    assert!((c.rmse - (0.03f64 / 6.0).sqrt()).abs() < 1e-7, "{}", c.rmse);
+    assert!((c.psnr - 10.0 * 200f64.log10()).abs() < 1e-5, "{}", c.psnr);
+    // Visibility: +0.25 and -0.125 (exact in binary): mean +0.0625, worst +0.25.
+    assert_eq!(c.vis_bias, 0.0625);
+    assert_eq!(c.vis_worst, 0.25);
+    // The uncovered pixel counts in the whole-image PSNR, not here.
+    assert!(compare(&reference, &test, false).psnr < c.psnr - 3.0);
+    // The worst keeps its sign.
+    let c = compare_covered(&reference, &test, &[false, true, false]);
+    assert_eq!((c.vis_bias, c.vis_worst), (-0.125, -0.125));
+    // Nothing covered: no error, no bias.
+    let c = compare_covered(&reference, &test, &[false; 3]);
+    assert_eq!(
+        (c.pixels, c.rmse, c.psnr, c.vis_bias, c.vis_worst),
+        (0, 0.0, f64::INFINITY, 0.0, 0.0)
+    );
+    // Display clamping as in `compare`: 1.5 against 1.0 is no error.
+    let c = compare_covered(
+        &image(vec![[1.0; 3]], vec![0.0]),
+        &image(vec![[1.5; 3]], vec![0.0]),
+        &[true],
+    );
+    assert_eq!(c.psnr, f64::INFINITY);
+}
+
+#[test]
+fn flip_is_zero_for_identical_images_and_grows_with_the_difference() {
+    let a = Image {
+        width: 16,
+        height: 16,
+        rgb: vec![[0.5; 3]; 256],
+        vis: vec![1.0; 256],
+    };
+    let mut b = a.clone();
+    let mut c = a.clone();
+    for p in 0..128 {
+        b.rgb[p] = [0.55; 3];
+        c.rgb[p] = [0.9; 3];
+    }
+    assert_eq!(compare(&a, &a, true).flip, Some(0.0));
+    let (fb, fc) = (compare(&a, &b, true).flip.unwrap(), compare(&a, &c, true).flip.unwrap());
+    assert!(0.0 < fb && fb < fc && fc <= 1.0, "{fb} {fc}");
+}
+
+#[test]
+fn saturated_tails_by_hand() {
+    // K = 0, paper tail (colors saturate at 1023): pixel 0 gets 5 fragments of color 1
+    // (5 x 255 = 1275 > 1023), pixel 1 gets 4 (1020 < 1023), pixel 2 one of alpha 1 and
+    // color 0.
+    let mut frags = Vec::new();
+    for i in 0..5 {
+        frags.push((0, 1.0 + i as f32, [1.0, 0.0, 0.0], 1.0));
+    }
+    for i in 0..4 {
+        frags.push((1, 1.0 + i as f32, [0.0, 0.0, 1.0], 1.0));
+    }
+    frags.push((2, 1.0, [0.0; 3], 1.0));
+    let s = stream(3, 1, &frags);
+    let f = Frame::new(&s);
+    let (_, saturated) = hybrid_with(0, Arith::Paper, &f).unwrap();
+    assert_eq!(saturated, 1);
+    // One head row takes one fragment per pixel out of the tail: none saturates.
+    let (_, saturated) = hybrid_with(1, Arith::Paper, &f).unwrap();
+    assert_eq!(saturated, 0);
+    // The report counts them per method.
+    let run = run_stream(
+        Scene::Fog,
+        0,
+        &s,
+        &[Method::HybridWith(0, Arith::Paper), Method::Over],
+        false,
+    )
+    .unwrap();
+    assert_eq!(run.measures[0].saturated, Some(1));
+    assert_eq!(run.measures[1].saturated, None);
+    assert_eq!((run.depth.covered, run.depth.max), (3, 5));
+}
+
+#[test]
+fn spread_prints_median_min_max() {
+    assert_eq!(spread(&[3.0, 1.0, 2.0], 1, false), "2.0 [1.0, 3.0]");
+    assert_eq!(spread(&[4.0, 1.0, 2.0, 3.0], 1, false), "2.5 [1.0, 4.0]");
+    assert_eq!(spread(&[0.25], 2, true), "+0.25");
+    assert_eq!(spread(&[f64::INFINITY, 1.0, 2.0], 0, false), "2 [1, inf]");
+    assert_eq!(spread(&[f64::NAN], 1, false), "-");
+    assert_eq!(spread(&[], 1, false), "-");
+}
+
+#[test]
+fn report_has_every_scene_and_method() {
+    let methods = oit_lab::faint::methods();
+    // OVER, then MLAB 1, 2, 4, 8 and HT 0, 1, 3, 7, each with both arithmetics.
+    assert_eq!(methods.len(), 17);
+    assert_eq!(
+        methods
+            .iter()
+            .map(|m| m.bytes_per_pixel(&Frame::new(&stream(1, 1, &[]))))
+            .sum::<f64>(),
+        8.0 + 4.0 * 8.0 * (1 + 2 + 4 + 8) as f64
+    );
+    let mut runs = Vec::new();
+    for (sc, seed) in [(Scene::Glass, 1), (Scene::Glass, 2), (Scene::Splats, 1)] {
+        let s = sc.generate(32, 18, seed);
+        runs.push(run_stream(sc, seed, &s, &methods, false).unwrap());
+    }
+    let full = oit_lab::faint::full_table(&runs);
+    assert_eq!(full.lines().count(), 2 + 2 * methods.len());
+    assert!(full.contains("| MLAB 4 unbiased | 32 |") && full.contains("| HT 3 paper | 32 |"));
+    let head = oit_lab::faint::headline_table(&runs);
+    assert_eq!(head.lines().count(), 2 + 2);
+    assert!(head.starts_with("| scene | frags / covered px (mean; max) | OVER unsorted | MLAB 4 paper |"));
+    // Two seeds of GLASS give a spread, one of SPLATS a single value.
+    let glass = head.lines().find(|l| l.starts_with("| GLASS")).unwrap();
+    let splats = head.lines().find(|l| l.starts_with("| SPLATS")).unwrap();
+    assert!(glass.contains(" ["), "{glass}");
+    assert!(!splats.contains(" ["), "{splats}");
 }

@@ -1,6 +1,6 @@
 //! Every method against a hand-computed case of its own formula, on 1x1 frames.
 
-use oit_lab::methods::{Frame, Image, Method, Visibility, Weight};
+use oit_lab::methods::{Arith, Frame, Image, Method, Visibility, Weight};
 use oit_lab::stream::{Frag, Stream};
 
 /// A 1x1 stream from `(depth, premultiplied color, alpha)` in submission order.
@@ -204,7 +204,7 @@ fn mul8(a: f32, b: f32) -> f32 {
 fn mlab_two_rows_three_fragments() {
     // Submitted z 3 (blue), z 1 (red), z 2 (green), each alpha 0.5, premultiplied 0.5.
     let s = pixel(&[(3.0, BLUE, 0.5), (1.0, RED, 0.5), (2.0, GREEN, 0.5)], WHITE);
-    let img = render(Method::Mlab(2), &s);
+    let img = render(Method::MlabWith(2, Arith::Paper), &s);
     // Rows: red; then green merged with blue (Eq. 7-8 in unorm8).
     let (c, t) = (q(0.5), 255.0 - q(0.5));
     let row0 = ([c, 0.0, 0.0], t);
@@ -214,7 +214,7 @@ fn mlab_two_rows_three_fragments() {
     close(img.rgb[0], want, 1e-6);
     assert!((img.vis[0] - v1 * row1.1 / 255.0).abs() < 1e-7);
     // Four rows keep all three: exact up to the 8-bit quantization.
-    let img4 = render(Method::Mlab(4), &s);
+    let img4 = render(Method::MlabWith(4, Arith::Paper), &s);
     let exact = render(Method::Reference, &s);
     close(img4.rgb[0], exact.rgb[0], 2.0 / 255.0);
 }
@@ -222,7 +222,7 @@ fn mlab_two_rows_three_fragments() {
 #[test]
 fn hybrid_one_head_row_and_tail() {
     let s = pixel(&[(3.0, BLUE, 0.5), (1.0, RED, 0.5), (2.0, GREEN, 0.5)], WHITE);
-    let img = render(Method::Hybrid(1), &s);
+    let img = render(Method::HybridWith(1, Arith::Paper), &s);
     // Head: red. Tail: color sums (0, 128, 128), alpha sum 256, count 2.
     let (c, t) = (q(0.5), 255.0 - q(0.5));
     let th = t / 255.0;
@@ -243,7 +243,7 @@ fn mlab_transmittance_stalls_in_8_bits() {
         .map(|i| (1.0 + i as f32, [0.01, 0.01, 0.01], 0.01f32))
         .collect();
     let s = pixel(&frags, [0.0; 3]);
-    let img = render(Method::Mlab(1), &s);
+    let img = render(Method::MlabWith(1, Arith::Paper), &s);
     let tf = 255.0 - q(0.01);
     let mut x = 255.0;
     for _ in 0..300 {

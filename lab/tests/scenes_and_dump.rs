@@ -15,7 +15,7 @@ const PINNED: [(Scene, u64); 7] = [
     (Scene::Forest, 0x99975b67b8d53ec4),
     (Scene::Teapots, 0x9c1633910248c6f5),
     (Scene::Glass, 0x760e1d1085a9dd51),
-    (Scene::Fog, 0x62efd6e35e8790a4),
+    (Scene::Fog, 0xaf9a335aece109b8),
     (Scene::Splats, 0x28021c03643ef03c),
 ];
 
