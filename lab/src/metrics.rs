@@ -106,6 +106,12 @@ pub struct Covered {
     /// The signed `vis(method) - vis(reference)` of largest magnitude over covered pixels
     /// (the first one found on ties; 0 when no pixel is covered).
     pub vis_worst: f64,
+    /// The high-frequency part of the error (noise, as a dither adds): RMS over covered pixels
+    /// and channels of `e(p) - mean(e over the covered pixels of the 3x3 block around p)`,
+    /// `e = test - reference` on the display values. A constant error gives 0; an isolated
+    /// error `d` at one interior pixel of a covered area gives `8 d / 9` there. 0 when no pixel
+    /// is covered.
+    pub noise: f64,
 }
 
 /// [`Covered`] metrics of `test` against `reference` (same size) over the pixels where
@@ -131,6 +137,7 @@ pub fn compare_covered(reference: &Image, test: &Image, covered: &[bool]) -> Cov
     } else {
         0.0
     };
+    let noise = high_pass_rms(reference, test, covered);
     Covered {
         pixels,
         rmse,
@@ -141,5 +148,40 @@ pub fn compare_covered(reference: &Image, test: &Image, covered: &[bool]) -> Cov
         },
         vis_bias: if pixels > 0 { vb / pixels as f64 } else { 0.0 },
         vis_worst: worst,
+        noise,
     }
+}
+
+/// See [`Covered::noise`].
+fn high_pass_rms(reference: &Image, test: &Image, covered: &[bool]) -> f64 {
+    let (w, h) = (reference.width as usize, reference.height as usize);
+    let err = |p: usize, k: usize| display(test.rgb[p][k]) - display(reference.rgb[p][k]);
+    let (mut sum, mut n) = (0.0f64, 0usize);
+    for y in 0..h {
+        for x in 0..w {
+            let p = y * w + x;
+            if !covered[p] {
+                continue;
+            }
+            let mut local = [0.0f64; 3];
+            let mut count = 0usize;
+            for yy in y.saturating_sub(1)..(y + 2).min(h) {
+                for xx in x.saturating_sub(1)..(x + 2).min(w) {
+                    let q = yy * w + xx;
+                    if covered[q] {
+                        count += 1;
+                        for (k, l) in local.iter_mut().enumerate() {
+                            *l += err(q, k);
+                        }
+                    }
+                }
+            }
+            for (k, l) in local.iter().enumerate() {
+                let d = err(p, k) - l / count as f64;
+                sum += d * d;
+            }
+            n += 3;
+        }
+    }
+    if n > 0 { (sum / n as f64).sqrt() } else { 0.0 }
 }

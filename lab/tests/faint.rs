@@ -168,6 +168,34 @@ fn covered_metrics_by_hand() {
 }
 
 #[test]
+fn noise_is_the_high_pass_of_the_error_by_hand() {
+    let grid = |f: &dyn Fn(usize) -> f32| Image {
+        width: 3,
+        height: 3,
+        rgb: (0..9).map(|p| [f(p); 3]).collect(),
+        vis: vec![0.0; 9],
+    };
+    let reference = grid(&|_| 0.25);
+    // A constant error is no noise.
+    let constant = grid(&|_| 0.375);
+    let c = compare_covered(&reference, &constant, &[true; 9]);
+    assert_eq!((c.rmse, c.noise), (0.125, 0.0));
+    // An error d = 0.5 at the centre only: the centre's 3x3 mean is d/9 (high pass 8d/9), a
+    // corner's 2x2 block holds the centre (d/4, high pass -d/4), an edge's 2x3 block too
+    // (d/6, high pass -d/6). RMS over the 9 pixels (channels equal):
+    // sqrt((64/81 + 4/16 + 4/36) d^2 / 9).
+    let spike = grid(&|p| if p == 4 { 0.75 } else { 0.25 });
+    let c = compare_covered(&reference, &spike, &[true; 9]);
+    let d = 0.5f64;
+    let want = ((64.0 / 81.0 + 4.0 / 16.0 + 4.0 / 36.0) * d * d / 9.0).sqrt();
+    assert!((c.noise - want).abs() < 1e-12, "{} {want}", c.noise);
+    // Uncovered pixels take no part: with only the centre covered its block is itself.
+    let mut only_centre = [false; 9];
+    only_centre[4] = true;
+    assert_eq!(compare_covered(&reference, &spike, &only_centre).noise, 0.0);
+}
+
+#[test]
 fn flip_is_zero_for_identical_images_and_grows_with_the_difference() {
     let a = Image {
         width: 16,
