@@ -55,17 +55,17 @@ pub struct TailSums {
 
 /// Per pixel, the sums over the fragments beyond the nearest `k` (front to back, a later
 /// submission in front on equal depth, as HT's head keeps them), each quantized to a row as
-/// the kernel quantizes it; rows that carry neither color nor opacity are not counted, as
-/// the kernel's tail skips them. Errors for a fragment the kernel refuses.
-pub fn tail_sums(frame: &Frame, k: usize) -> Result<Vec<TailSums>, String> {
+/// the kernel quantizes it in arithmetic `arith`; rows that carry neither color nor opacity
+/// are not counted, as the kernel's tail skips them. Errors for a fragment the kernel refuses.
+pub fn tail_sums(frame: &Frame, k: usize, arith: Arith) -> Result<Vec<TailSums>, String> {
     let frags = &frame.stream.frags;
     let mut out = vec![TailSums::default(); frame.stream.pixels()];
     for (p, sums) in out.iter_mut().enumerate() {
         for &i in frame.sorted.of(p).iter().skip(k) {
-            let row = frags[i as usize]
+            let fragment = frags[i as usize]
                 .to_kernel()
-                .map_err(|e| format!("fragment {i}: {e}"))?
-                .row();
+                .map_err(|e| format!("fragment {i}: {e}"))?;
+            let row = arith.quantize(&fragment);
             if row.is_invisible() {
                 continue;
             }
@@ -107,9 +107,9 @@ pub struct TailStats {
 /// Names of [`TailStats::fields`].
 pub const TAIL_FIELDS: [&str; 5] = ["R", "G", "B", "alpha", "count"];
 
-/// Tail-sum statistics of a frame with `k` head rows.
-pub fn tail_stats(frame: &Frame, k: usize) -> Result<TailStats, String> {
-    let sums = tail_sums(frame, k)?;
+/// Tail-sum statistics of a frame with `k` head rows, fragments quantized in `arith`.
+pub fn tail_stats(frame: &Frame, k: usize, arith: Arith) -> Result<TailStats, String> {
+    let sums = tail_sums(frame, k, arith)?;
     let covered: Vec<usize> = (0..sums.len()).filter(|&p| !frame.bins.of(p).is_empty()).collect();
     let get = |t: &TailSums, i: usize| {
         if i < 3 {

@@ -103,6 +103,7 @@ OPTIONS:
     --tails           print only the HT tail sums (no rendering): per scene and seed, the
                       sums over each pixel's fragments beyond the nearest K, in units of 1/255
     --tail-k K        head rows for --tails (default 3)
+    --arith NAME      quantization for --tails: paper or unbiased (default unbiased)
     -h, --help        this text
 ";
 
@@ -599,6 +600,13 @@ fn cmd_faint(mut a: Args) -> Result<(), Fail> {
     let k = parse_list::<usize>(&mut a, "--tail-k")?
         .and_then(|v| v.first().copied())
         .unwrap_or(3);
+    let arith = match a.value("--arith")?.as_deref() {
+        None => oit_lab::methods::Arith::DEFAULT,
+        Some(n) => oit_lab::methods::Arith::ALL
+            .into_iter()
+            .find(|x| x.name() == n.to_ascii_lowercase())
+            .ok_or_else(|| usage(format!("--arith: '{n}' is not paper or unbiased")))?,
+    };
     a.finish()?;
     let start = Instant::now();
     if tails {
@@ -610,13 +618,18 @@ fn cmd_faint(mut a: Args) -> Result<(), Fail> {
                     .validate()
                     .map_err(|(i, e)| runtime(format!("{}: fragment {i}: {e}", sc.name())))?;
                 let frame = Frame::new(&stream);
-                rows.push((sc.name().to_string(), seed, tail_stats(&frame, k).map_err(runtime)?));
+                rows.push((
+                    sc.name().to_string(),
+                    seed,
+                    tail_stats(&frame, k, arith).map_err(runtime)?,
+                ));
             }
         }
         println!(
-            "# oit-lab faint --tails: {}x{}, seeds {seeds:?}, K = {k}, {:.1} s\n",
+            "# oit-lab faint --tails: {}x{}, seeds {seeds:?}, K = {k}, {} quantization, {:.1} s\n",
             size.0,
             size.1,
+            arith.name(),
             start.elapsed().as_secs_f64()
         );
         println!("{}", tail_table(&rows, k));
@@ -648,8 +661,8 @@ fn cmd_faint(mut a: Args) -> Result<(), Fail> {
     );
     println!(
         "Values are median [min, max] over the seeds; covered pixels are those where the reference \
-         has at least one fragment. Arithmetic of the kernel: {}.\n",
-        oit_lab::methods::ARITH_STATUS
+         has at least one fragment; `paper` and `unbiased` are the kernel's arithmetics \
+         (`mlab::Paper`, `mlab::Unbiased`, the default).\n"
     );
     println!(
         "## PSNR on covered pixels / mean FLIP, 32 B/px against OVER\n\n{}",

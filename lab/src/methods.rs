@@ -18,9 +18,8 @@
 use crate::stream::{Bins, Stream};
 use mlab::glam::Vec3;
 use mlab::half::f16;
-use mlab::hybrid::{TAIL_ALPHA_MAX, TAIL_COLOR_MAX, TAIL_COUNT_MAX};
 use mlab::lanes::{self, HybridSpan, LANES, ResolvedLanes};
-use mlab::{HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row};
+use mlab::{Arithmetic, Fragment, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased};
 
 /// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
 /// visibility of the background (the product of transmittances the method ends up with).
@@ -147,8 +146,9 @@ impl Weight {
 pub const UNDER_THRESHOLD: f32 = 0.01;
 
 /// The kernel's arithmetic (issue 9): how MLAB's merge rounds its unorm8 products, how a
-/// fragment is quantized to a row, and the HT tail's layout. The lab selects it in one place,
-/// [`mlab_with`] and [`hybrid_with`].
+/// fragment is quantized to a row, and the HT tail's layout: `mlab::Paper` or
+/// `mlab::Unbiased`. The lab turns it into the kernel's type in one place, the `*_with`
+/// functions of this module ([`mlab_with`], [`hybrid_with`], ...).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Arith {
     /// The paper's: products and fragments rounded to nearest, the 3 x 10-bit tail.
@@ -169,10 +169,6 @@ impl Arith {
         }
     }
 }
-
-/// Whether [`Arith`] reaches the kernel's two arithmetics, for reports.
-pub const ARITH_STATUS: &str = "not wired yet: the kernel has one arithmetic (the paper's), and \
-     both `paper` and `unbiased` rows run it";
 
 /// MLAB row counts the lab can run (const generics are instantiated for these).
 pub const MLAB_SIZES: [usize; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 12, 16];
@@ -286,63 +282,11 @@ impl Method {
     pub fn render(self, frame: &Frame) -> Result<Image, String> {
         match self {
             Method::Reference => Ok(reference(frame)),
-            Method::Mlab(m) => mlab_dyn(m, frame, false),
-            Method::MlabSorted(m) => mlab_dyn(m, frame, true),
-            Method::MlabLanes(m) => match m {
-                1 => run_lanes(
-                    frame,
-                    [[Row::EMPTY; LANES]; 1],
-                    lanes::mlab_insert_with::<Paper, 1>,
-                    lanes::mlab_resolve::<1>,
-                ),
-                2 => run_lanes(
-                    frame,
-                    [[Row::EMPTY; LANES]; 2],
-                    lanes::mlab_insert_with::<Paper, 2>,
-                    lanes::mlab_resolve::<2>,
-                ),
-                4 => run_lanes(
-                    frame,
-                    [[Row::EMPTY; LANES]; 4],
-                    lanes::mlab_insert_with::<Paper, 4>,
-                    lanes::mlab_resolve::<4>,
-                ),
-                8 => run_lanes(
-                    frame,
-                    [[Row::EMPTY; LANES]; 8],
-                    lanes::mlab_insert_with::<Paper, 8>,
-                    lanes::mlab_resolve::<8>,
-                ),
-                _ => Err(format!("MLAB {m} lanes: supported row counts are 1, 2, 4, 8")),
-            },
-            Method::HybridLanes(k) => match k {
-                0 => run_lanes(
-                    frame,
-                    HybridSpan::<0, Paper>::new(),
-                    lanes::hybrid_insert::<0, Paper>,
-                    lanes::hybrid_resolve::<0, Paper>,
-                ),
-                1 => run_lanes(
-                    frame,
-                    HybridSpan::<1, Paper>::new(),
-                    lanes::hybrid_insert::<1, Paper>,
-                    lanes::hybrid_resolve::<1, Paper>,
-                ),
-                3 => run_lanes(
-                    frame,
-                    HybridSpan::<3, Paper>::new(),
-                    lanes::hybrid_insert::<3, Paper>,
-                    lanes::hybrid_resolve::<3, Paper>,
-                ),
-                7 => run_lanes(
-                    frame,
-                    HybridSpan::<7, Paper>::new(),
-                    lanes::hybrid_insert::<7, Paper>,
-                    lanes::hybrid_resolve::<7, Paper>,
-                ),
-                _ => Err(format!("HT {k} lanes: supported head sizes are 0, 1, 3, 7")),
-            },
-            Method::Hybrid(k) => hybrid_dyn(k, frame).map(|(image, _)| image),
+            Method::Mlab(m) => mlab_with(m, Arith::DEFAULT, frame),
+            Method::MlabSorted(m) => mlab_sorted_with(m, Arith::DEFAULT, frame),
+            Method::MlabLanes(m) => mlab_lanes_with(m, Arith::DEFAULT, frame),
+            Method::HybridLanes(k) => hybrid_lanes_with(k, Arith::DEFAULT, frame),
+            Method::Hybrid(k) => hybrid_with(k, Arith::DEFAULT, frame).map(|(image, _)| image),
             Method::MlabWith(m, a) => mlab_with(m, a, frame),
             Method::HybridWith(k, a) => hybrid_with(k, a, frame).map(|(image, _)| image),
             Method::Over => Ok(over(frame)),
@@ -435,14 +379,14 @@ fn err(e: impl std::fmt::Display) -> String {
     e.to_string()
 }
 
-/// MLAB with the kernel's framebuffer view, in submission order (or, when `sorted`, each
-/// pixel's fragments front to back).
-pub fn run_mlab<const M: usize>(frame: &Frame, sorted: bool) -> Result<Image, String> {
+/// MLAB with the kernel's framebuffer view in arithmetic `A`, in submission order (or, when
+/// `sorted`, each pixel's fragments front to back).
+pub fn run_mlab<const M: usize, A: Arithmetic>(frame: &Frame, sorted: bool) -> Result<Image, String> {
     let s = frame.stream;
-    let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M, Paper>::rows_needed(s.width, s.height).map_err(err)?];
-    let mut fb = MlabFramebuffer::<M, Paper>::new(&mut storage, s.width, s.height).map_err(err)?;
+    let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M, A>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = MlabFramebuffer::<M, A>::new(&mut storage, s.width, s.height).map_err(err)?;
     fb.clear();
-    let insert = |fb: &mut MlabFramebuffer<M, Paper>, i: usize| -> Result<(), String> {
+    let insert = |fb: &mut MlabFramebuffer<M, A>, i: usize| -> Result<(), String> {
         let f = &s.frags[i];
         let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
         fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)
@@ -459,13 +403,14 @@ pub fn run_mlab<const M: usize>(frame: &Frame, sorted: bool) -> Result<Image, St
     kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
 }
 
-/// Hybrid Transparency with the kernel's framebuffer view, in submission order; also the
-/// number of pixels whose tail has a field at its maximum (saturated).
-pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<(Image, usize), String> {
+/// Hybrid Transparency with the kernel's framebuffer view in arithmetic `A` (which picks the
+/// tail), in submission order; also the number of pixels whose tail has a field at its
+/// maximum (`saturated`).
+pub fn run_hybrid<const K: usize, A: Arithmetic>(frame: &Frame) -> Result<(Image, usize), String> {
     let s = frame.stream;
-    let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K, Paper>::rows_needed(s.width, s.height).map_err(err)?];
-    let mut fb = HybridFramebuffer::<K, Paper>::new(&mut storage, s.width, s.height).map_err(err)?;
-    // The tail slot of `Row::EMPTY` bytes is not `Tail::EMPTY`: clear for a new frame.
+    let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K, A>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = HybridFramebuffer::<K, A>::new(&mut storage, s.width, s.height).map_err(err)?;
+    // The tail slot of `Row::EMPTY` bytes is not an empty tail: clear for a new frame.
     fb.clear();
     for (i, f) in s.frags.iter().enumerate() {
         let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
@@ -474,11 +419,7 @@ pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<(Image, usize), Strin
     let mut saturated = 0;
     for y in 0..s.height {
         for x in 0..s.width {
-            let t = fb.pixel(x, y).map_err(err)?.1;
-            let full = t.color_sum().iter().any(|&c| c >= TAIL_COLOR_MAX)
-                || t.alpha_sum() >= TAIL_ALPHA_MAX
-                || t.count() >= TAIL_COUNT_MAX;
-            saturated += usize::from(full);
+            saturated += usize::from(fb.pixel(x, y).map_err(err)?.1.saturated());
         }
     }
     Ok((kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))?, saturated))
@@ -487,10 +428,11 @@ pub fn run_hybrid<const K: usize>(frame: &Frame) -> Result<(Image, usize), Strin
 /// A kernel through its 8-pixel lanes: the frame is cut into spans of 8 pixels of a row;
 /// consecutive fragments of the stream that fall in one span on distinct lanes are inserted
 /// with one call (a rasterizer's span of a primitive), which keeps each pixel's submission
-/// order.
+/// order. Fragments are quantized with `quantize` (the arithmetic's).
 fn run_lanes<S: Clone>(
     frame: &Frame,
     empty: S,
+    quantize: fn(&Fragment) -> Row,
     insert: fn(&mut S, &[Row; LANES], u8),
     resolve: fn(&S) -> ResolvedLanes,
 ) -> Result<Image, String> {
@@ -499,7 +441,7 @@ fn run_lanes<S: Clone>(
     let mut spans = vec![empty; spans_x * s.height as usize];
     let (mut cur, mut rows, mut mask) = (0usize, [Row::EMPTY; LANES], 0u8);
     for (i, f) in s.frags.iter().enumerate() {
-        let row = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?.row();
+        let row = quantize(&f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?);
         let (x, y) = ((f.pixel % s.width) as usize, (f.pixel / s.width) as usize);
         let (span, lane) = (y * spans_x + x / LANES, x % LANES);
         if mask != 0 && (span != cur || mask & (1 << lane) != 0) {
@@ -534,52 +476,163 @@ fn run_lanes<S: Clone>(
     })
 }
 
-fn mlab_dyn(m: usize, frame: &Frame, sorted: bool) -> Result<Image, String> {
+fn mlab_dyn<A: Arithmetic>(m: usize, frame: &Frame, sorted: bool) -> Result<Image, String> {
     match m {
-        1 => run_mlab::<1>(frame, sorted),
-        2 => run_mlab::<2>(frame, sorted),
-        3 => run_mlab::<3>(frame, sorted),
-        4 => run_mlab::<4>(frame, sorted),
-        5 => run_mlab::<5>(frame, sorted),
-        6 => run_mlab::<6>(frame, sorted),
-        7 => run_mlab::<7>(frame, sorted),
-        8 => run_mlab::<8>(frame, sorted),
-        12 => run_mlab::<12>(frame, sorted),
-        16 => run_mlab::<16>(frame, sorted),
+        1 => run_mlab::<1, A>(frame, sorted),
+        2 => run_mlab::<2, A>(frame, sorted),
+        3 => run_mlab::<3, A>(frame, sorted),
+        4 => run_mlab::<4, A>(frame, sorted),
+        5 => run_mlab::<5, A>(frame, sorted),
+        6 => run_mlab::<6, A>(frame, sorted),
+        7 => run_mlab::<7, A>(frame, sorted),
+        8 => run_mlab::<8, A>(frame, sorted),
+        12 => run_mlab::<12, A>(frame, sorted),
+        16 => run_mlab::<16, A>(frame, sorted),
         _ => Err(format!("MLAB {m}: supported row counts are {MLAB_SIZES:?}")),
     }
 }
 
-/// MLAB `m` with arithmetic `arith`, in submission order: the one place where the lab
-/// picks the kernel's arithmetic for MLAB. (Until the kernel offers both, both map to the
-/// kernel as it is, which is the paper's arithmetic.)
+fn hybrid_dyn<A: Arithmetic>(k: usize, frame: &Frame) -> Result<(Image, usize), String> {
+    match k {
+        0 => run_hybrid::<0, A>(frame),
+        1 => run_hybrid::<1, A>(frame),
+        2 => run_hybrid::<2, A>(frame),
+        3 => run_hybrid::<3, A>(frame),
+        4 => run_hybrid::<4, A>(frame),
+        5 => run_hybrid::<5, A>(frame),
+        6 => run_hybrid::<6, A>(frame),
+        7 => run_hybrid::<7, A>(frame),
+        11 => run_hybrid::<11, A>(frame),
+        15 => run_hybrid::<15, A>(frame),
+        _ => Err(format!("HT {k}: supported head sizes are {HT_SIZES:?}")),
+    }
+}
+
+fn mlab_lanes<A: Arithmetic>(m: usize, frame: &Frame) -> Result<Image, String> {
+    let q: fn(&Fragment) -> Row = A::quantize;
+    match m {
+        1 => run_lanes(
+            frame,
+            [[Row::EMPTY; LANES]; 1],
+            q,
+            lanes::mlab_insert_with::<A, 1>,
+            lanes::mlab_resolve::<1>,
+        ),
+        2 => run_lanes(
+            frame,
+            [[Row::EMPTY; LANES]; 2],
+            q,
+            lanes::mlab_insert_with::<A, 2>,
+            lanes::mlab_resolve::<2>,
+        ),
+        4 => run_lanes(
+            frame,
+            [[Row::EMPTY; LANES]; 4],
+            q,
+            lanes::mlab_insert_with::<A, 4>,
+            lanes::mlab_resolve::<4>,
+        ),
+        8 => run_lanes(
+            frame,
+            [[Row::EMPTY; LANES]; 8],
+            q,
+            lanes::mlab_insert_with::<A, 8>,
+            lanes::mlab_resolve::<8>,
+        ),
+        _ => Err(format!("MLAB {m} lanes: supported row counts are 1, 2, 4, 8")),
+    }
+}
+
+fn hybrid_lanes<A: Arithmetic>(k: usize, frame: &Frame) -> Result<Image, String> {
+    let q: fn(&Fragment) -> Row = A::quantize;
+    match k {
+        0 => run_lanes(
+            frame,
+            HybridSpan::<0, A>::new(),
+            q,
+            lanes::hybrid_insert::<0, A>,
+            lanes::hybrid_resolve::<0, A>,
+        ),
+        1 => run_lanes(
+            frame,
+            HybridSpan::<1, A>::new(),
+            q,
+            lanes::hybrid_insert::<1, A>,
+            lanes::hybrid_resolve::<1, A>,
+        ),
+        3 => run_lanes(
+            frame,
+            HybridSpan::<3, A>::new(),
+            q,
+            lanes::hybrid_insert::<3, A>,
+            lanes::hybrid_resolve::<3, A>,
+        ),
+        7 => run_lanes(
+            frame,
+            HybridSpan::<7, A>::new(),
+            q,
+            lanes::hybrid_insert::<7, A>,
+            lanes::hybrid_resolve::<7, A>,
+        ),
+        _ => Err(format!("HT {k} lanes: supported head sizes are 0, 1, 3, 7")),
+    }
+}
+
+// The one place where the lab's `Arith` picks the kernel's arithmetic type.
+
+/// MLAB `m` with arithmetic `arith` (scalar kernel), in submission order.
 pub fn mlab_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
     match arith {
-        Arith::Paper | Arith::Unbiased => mlab_dyn(m, frame, false),
+        Arith::Paper => mlab_dyn::<Paper>(m, frame, false),
+        Arith::Unbiased => mlab_dyn::<Unbiased>(m, frame, false),
     }
 }
 
-/// HT `k` with arithmetic `arith`: the image and the number of pixels with a saturated
-/// tail. The one place where the lab picks the kernel's arithmetic for HT.
+/// MLAB `m` with arithmetic `arith`, fed each pixel's fragments front to back.
+pub fn mlab_sorted_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+    match arith {
+        Arith::Paper => mlab_dyn::<Paper>(m, frame, true),
+        Arith::Unbiased => mlab_dyn::<Unbiased>(m, frame, true),
+    }
+}
+
+/// HT `k` with arithmetic `arith` (scalar kernel): the image and the number of pixels with a
+/// saturated tail.
 pub fn hybrid_with(k: usize, arith: Arith, frame: &Frame) -> Result<(Image, usize), String> {
     match arith {
-        Arith::Paper | Arith::Unbiased => hybrid_dyn(k, frame),
+        Arith::Paper => hybrid_dyn::<Paper>(k, frame),
+        Arith::Unbiased => hybrid_dyn::<Unbiased>(k, frame),
     }
 }
 
-fn hybrid_dyn(k: usize, frame: &Frame) -> Result<(Image, usize), String> {
-    match k {
-        0 => run_hybrid::<0>(frame),
-        1 => run_hybrid::<1>(frame),
-        2 => run_hybrid::<2>(frame),
-        3 => run_hybrid::<3>(frame),
-        4 => run_hybrid::<4>(frame),
-        5 => run_hybrid::<5>(frame),
-        6 => run_hybrid::<6>(frame),
-        7 => run_hybrid::<7>(frame),
-        11 => run_hybrid::<11>(frame),
-        15 => run_hybrid::<15>(frame),
-        _ => Err(format!("HT {k}: supported head sizes are {HT_SIZES:?}")),
+/// MLAB `m` (1, 2, 4 or 8) with arithmetic `arith` through the kernel's 8-pixel lanes.
+pub fn mlab_lanes_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+    match arith {
+        Arith::Paper => mlab_lanes::<Paper>(m, frame),
+        Arith::Unbiased => mlab_lanes::<Unbiased>(m, frame),
+    }
+}
+
+/// HT `k` (0, 1, 3 or 7) with arithmetic `arith` through the kernel's 8-pixel lanes.
+pub fn hybrid_lanes_with(k: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+    match arith {
+        Arith::Paper => hybrid_lanes::<Paper>(k, frame),
+        Arith::Unbiased => hybrid_lanes::<Unbiased>(k, frame),
+    }
+}
+
+impl Arith {
+    /// The kernel's default arithmetic (what `MlabFramebuffer::<M>` and the other kernel
+    /// types use when none is named), which [`Method::Mlab`] and the other kernel methods
+    /// without an arithmetic run.
+    pub const DEFAULT: Arith = Arith::Unbiased;
+
+    /// A validated fragment quantized to a row as this arithmetic quantizes it.
+    pub fn quantize(self, fragment: &Fragment) -> Row {
+        match self {
+            Arith::Paper => Paper::quantize(fragment),
+            Arith::Unbiased => Unbiased::quantize(fragment),
+        }
     }
 }
 

@@ -286,24 +286,56 @@ fn mlab_merge_is_exact_unless_a_fragment_lands_between_merged_rows() {
 
 #[test]
 fn lanes_give_the_same_image_as_scalar() {
+    use oit_lab::methods::{hybrid_lanes_with, hybrid_with, mlab_lanes_with, mlab_with};
     for sc in oit_lab::scenes::Scene::ALL {
         // 37 columns: the last span of each row is partial.
         let s = sc.generate(37, 21, 5);
         let f = Frame::new(&s);
-        for m in [1, 2, 4, 8] {
-            let (a, b) = (
-                Method::Mlab(m).render(&f).unwrap(),
-                Method::MlabLanes(m).render(&f).unwrap(),
-            );
-            assert!(a == b, "{}: MLAB {m} lanes differ from scalar", sc.name());
+        for a in Arith::ALL {
+            for m in [1, 2, 4, 8] {
+                let (x, y) = (mlab_with(m, a, &f).unwrap(), mlab_lanes_with(m, a, &f).unwrap());
+                assert!(x == y, "{}: MLAB {m} {} lanes differ from scalar", sc.name(), a.name());
+            }
+            for k in [0, 1, 3, 7] {
+                let (x, y) = (hybrid_with(k, a, &f).unwrap().0, hybrid_lanes_with(k, a, &f).unwrap());
+                assert!(x == y, "{}: HT {k} {} lanes differ from scalar", sc.name(), a.name());
+            }
         }
-        for k in [0, 1, 3, 7] {
-            let (a, b) = (
-                Method::Hybrid(k).render(&f).unwrap(),
-                Method::HybridLanes(k).render(&f).unwrap(),
-            );
-            assert!(a == b, "{}: HT {k} lanes differ from scalar", sc.name());
-        }
+        // The methods without an arithmetic run the kernel's default.
+        assert!(Method::MlabLanes(4).render(&f).unwrap() == mlab_with(4, Arith::DEFAULT, &f).unwrap());
+        assert!(Method::Hybrid(3).render(&f).unwrap() == hybrid_with(3, Arith::DEFAULT, &f).unwrap().0);
     }
     println!("lanes backend: {}", mlab::lanes::BACKEND);
+}
+
+#[test]
+fn arith_default_is_the_kernels_default() {
+    // Compiles only if `MlabFramebuffer<M>` is `MlabFramebuffer<M, Unbiased>`.
+    fn same<const M: usize>(fb: mlab::MlabFramebuffer<'_, M>) -> mlab::MlabFramebuffer<'_, M, mlab::Unbiased> {
+        fb
+    }
+    let mut storage = [mlab::Row::EMPTY; 4];
+    let _ = same(mlab::MlabFramebuffer::<4>::new(&mut storage, 1, 1).unwrap());
+    assert_eq!(Arith::DEFAULT, Arith::Unbiased);
+}
+
+#[test]
+fn unbiased_mlab_does_not_stall() {
+    // The stream of `mlab_transmittance_stalls_in_8_bits` (300 fragments of alpha 0.01 at
+    // distinct depths into one row). Unbiased quantization stores alpha 0.01 * 255 = 2.55 as 2
+    // or 3 (mean 2.55); each dithered merge rounds T_front * T_back / 255 down or up with the
+    // fraction as probability, so the stored T is an unbiased estimate of the exact product,
+    // 0.99^300 = 0.049. Its spread: each merge adds an error of variance at most 1/4 LSB^2, and
+    // an error at merge j is scaled by the later factors (about 0.99 each), so the variance at
+    // the end is at most (1/4) / (1 - 0.99^2) = 12.6 LSB^2, a standard deviation of 3.5 LSB =
+    // 0.014. The bound below is 4 standard deviations (0.055); the paper's stall is 0.116 off.
+    let frags: Vec<_> = (0..300)
+        .map(|i| (1.0 + i as f32, [0.01, 0.01, 0.01], 0.01f32))
+        .collect();
+    let s = pixel(&frags, [0.0; 3]);
+    let exact = render(Method::Reference, &s).vis[0];
+    let unbiased = render(Method::MlabWith(1, Arith::Unbiased), &s).vis[0];
+    let paper = render(Method::MlabWith(1, Arith::Paper), &s).vis[0];
+    assert!((unbiased - exact).abs() < 0.055, "exact {exact}, unbiased {unbiased}");
+    assert!(paper - exact > 0.1, "exact {exact}, paper {paper}");
 }
