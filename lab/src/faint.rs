@@ -328,13 +328,14 @@ fn scene_label(runs: &[&SceneRun]) -> String {
 
 /// The full table: per scene (fragments per covered pixel: mean over seeds as median [min,
 /// max], and the largest count), per method: PSNR on covered pixels, whole-image PSNR, mean
-/// FLIP, visibility bias (mean over covered pixels; worst pixel over every seed), the
+/// FLIP, visibility bias (mean over covered pixels; worst pixel over every seed; mean of its
+/// magnitude), the
 /// error's high-frequency part ([`Covered::noise`]), saturated HT tails (pixels, share of
 /// the covered pixels).
 pub fn full_table(runs: &[SceneRun]) -> String {
     let mut s = String::from(
-        "| scene | method | B/px | PSNR covered dB | PSNR dB | mean FLIP | vis bias mean | vis bias worst | noise | saturated tails |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| scene | method | B/px | PSNR covered dB | PSNR dB | mean FLIP | vis bias mean | vis bias worst | vis abs err | noise | saturated tails |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for (_, rs) in by_scene(runs) {
         let label = scene_label(&rs);
@@ -352,7 +353,7 @@ pub fn full_table(runs: &[SceneRun]) -> String {
                 None => "-".into(),
             };
             s += &format!(
-                "| {label} | {} | {:.0} | {} | {} | {} | {} | {:+.4} | {} | {sat} |\n",
+                "| {label} | {} | {:.0} | {} | {} | {} | {} | {:+.4} | {} | {} | {sat} |\n",
                 m.method.name(),
                 m.bytes,
                 spread(&col(&|x| x.covered.psnr), 1, false),
@@ -360,6 +361,7 @@ pub fn full_table(runs: &[SceneRun]) -> String {
                 spread(&col(&|x| x.quality.flip.unwrap_or(f64::NAN)), 3, false),
                 spread(&col(&|x| x.covered.vis_bias), 4, true),
                 worst(col(&|x| x.covered.vis_worst)),
+                spread(&col(&|x| x.covered.vis_abs), 4, false),
                 spread(&col(&|x| x.covered.noise), 4, false),
             );
         }

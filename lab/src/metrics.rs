@@ -106,6 +106,9 @@ pub struct Covered {
     /// The signed `vis(method) - vis(reference)` of largest magnitude over covered pixels
     /// (the first one found on ties; 0 when no pixel is covered).
     pub vis_worst: f64,
+    /// Mean over covered pixels of `|vis(method) - vis(reference)|`: with `vis_bias` near 0,
+    /// the typical size of a noise (a dither) rather than a bias. 0 when no pixel is covered.
+    pub vis_abs: f64,
     /// The high-frequency part of the error (noise, as a dither adds): RMS over covered pixels
     /// and channels of `e(p) - mean(e over the covered pixels of the 3x3 block around p)`,
     /// `e = test - reference` on the display values. A constant error gives 0; an isolated
@@ -119,7 +122,7 @@ pub struct Covered {
 pub fn compare_covered(reference: &Image, test: &Image, covered: &[bool]) -> Covered {
     assert_eq!((reference.width, reference.height), (test.width, test.height));
     assert_eq!(covered.len(), reference.rgb.len());
-    let (mut pixels, mut se, mut vb, mut worst) = (0usize, 0.0f64, 0.0f64, 0.0f64);
+    let (mut pixels, mut se, mut vb, mut worst, mut va) = (0usize, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
     for p in (0..covered.len()).filter(|&p| covered[p]) {
         pixels += 1;
         for k in 0..3 {
@@ -128,6 +131,7 @@ pub fn compare_covered(reference: &Image, test: &Image, covered: &[bool]) -> Cov
         }
         let v = test.vis[p] as f64 - reference.vis[p] as f64;
         vb += v;
+        va += v.abs();
         if v.abs() > worst.abs() {
             worst = v;
         }
@@ -148,6 +152,7 @@ pub fn compare_covered(reference: &Image, test: &Image, covered: &[bool]) -> Cov
         },
         vis_bias: if pixels > 0 { vb / pixels as f64 } else { 0.0 },
         vis_worst: worst,
+        vis_abs: if pixels > 0 { va / pixels as f64 } else { 0.0 },
         noise,
     }
 }

@@ -172,11 +172,12 @@ fn covered_metrics_by_hand() {
     // Visibility: +0.25 and -0.125 (exact in binary): mean +0.0625, worst +0.25.
     assert_eq!(c.vis_bias, 0.0625);
     assert_eq!(c.vis_worst, 0.25);
+    assert_eq!(c.vis_abs, 0.1875);
     // The uncovered pixel counts in the whole-image PSNR, not here.
     assert!(compare(&reference, &test, false).psnr < c.psnr - 3.0);
     // The worst keeps its sign.
     let c = compare_covered(&reference, &test, &[false, true, false]);
-    assert_eq!((c.vis_bias, c.vis_worst), (-0.125, -0.125));
+    assert_eq!((c.vis_bias, c.vis_worst, c.vis_abs), (-0.125, -0.125, 0.125));
     // Nothing covered: no error, no bias.
     let c = compare_covered(&reference, &test, &[false; 3]);
     assert_eq!(
