@@ -132,7 +132,7 @@ fn tail_sums_equal_the_kernel_tail_where_it_does_not_saturate() {
             );
         }
         // The wider tail saturates far less (at this tiny size SPLATS has up to 363 fragments
-        // in a pixel, and a few pixels pass the 13-bit alpha sum).
+        // in a pixel, and a blue sum passes 8191 in two pixels).
         assert!(unbiased_saturated * 10 <= paper_saturated.max(1), "{}", sc.name());
     }
 }
