@@ -709,10 +709,8 @@ impl FragmentLanes {
             };
             ok &= out.simd_ge(zero) & out.simd_le(one);
         }
-        let u = match A::KIND {
-            Kind::Paper => f32x8::splat(0.5),
-            Kind::Unbiased => fragment_dither8(pre, alpha, depth),
-        };
+        // Both arithmetics quantize to nearest ([`Arithmetic::quantize`]).
+        let u = f32x8::splat(0.5);
         let bytes = pre.map(|c| quantize8(c, u));
         let t = u32x8::splat(255) - quantize8(alpha, u);
         let rgbt: [u32; LANES] = cast(bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24));
@@ -733,20 +731,8 @@ impl FragmentLanes {
     }
 }
 
-/// [`crate::arith::fragment_dither`] for 8 lanes (16-bit mix in the low slot of each dword).
-#[inline(always)]
-fn fragment_dither8(pre: [f32x8; 3], alpha: f32x8, depth: f32x8) -> f32x8 {
-    let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
-    let x = bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth);
-    let s: u16x16 = cast((x ^ (x >> 16)) & u32x8::splat(0xffff));
-    let s: u16x16 = s * K;
-    let h = cast::<u16x16, u32x8>(s >> 8) & u32x8::splat(0xff);
-    (f32x8::from_u(h) + f32x8::splat(0.5)) * f32x8::splat(1.0 / 256.0)
-}
-
-/// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`,
-/// [`crate::arith::quantize_with_dither`] otherwise); other lanes give unspecified bytes
-/// and must be masked.
+/// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`);
+/// other lanes give unspecified bytes and must be masked.
 #[inline(always)]
 fn quantize8(v: f32x8, u: f32x8) -> u32x8 {
     let x = v * f32x8::splat(255.0) + u;
