@@ -670,28 +670,28 @@ impl FragmentLanes {
     /// Validate and quantize premultiplied fragments in the default arithmetic
     /// ([`Unbiased`]): see [`quantize_with`](Self::quantize_with).
     pub fn quantize(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<Unbiased>(mask, false)
+        self.quantize_impl(mask, false)
     }
 
     /// Validate and quantize premultiplied fragments as [`crate::Fragment::premultiplied`]
     /// then [`Arithmetic::quantize`] would, lane by lane.
     pub fn quantize_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<A>(mask, false)
+        self.quantize_impl(mask, false)
     }
 
     /// Validate and quantize straight-color fragments in the default arithmetic: see
     /// [`quantize_straight_with`](Self::quantize_straight_with).
     pub fn quantize_straight(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<Unbiased>(mask, true)
+        self.quantize_impl(mask, true)
     }
 
     /// Validate and quantize straight-color fragments, as [`crate::Fragment::straight`] then
     /// [`Arithmetic::quantize`] would (`color * alpha`, one f32 multiply).
     pub fn quantize_straight_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<A>(mask, true)
+        self.quantize_impl(mask, true)
     }
 
-    fn quantize_impl<A: Arithmetic>(&self, mask: u8, straight: bool) -> QuantizedLanes {
+    fn quantize_impl(&self, mask: u8, straight: bool) -> QuantizedLanes {
         let zero = f32x8::ZERO;
         let one = f32x8::ONE;
         let alpha = f32x8::new(self.alpha);
