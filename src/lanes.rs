@@ -670,28 +670,28 @@ impl FragmentLanes {
     /// Validate and quantize premultiplied fragments in the default arithmetic
     /// ([`Unbiased`]): see [`quantize_with`](Self::quantize_with).
     pub fn quantize(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl(mask, false)
+        self.quantize_impl::<Unbiased>(mask, false)
     }
 
     /// Validate and quantize premultiplied fragments as [`crate::Fragment::premultiplied`]
     /// then [`Arithmetic::quantize`] would, lane by lane.
     pub fn quantize_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl(mask, false)
+        self.quantize_impl::<A>(mask, false)
     }
 
     /// Validate and quantize straight-color fragments in the default arithmetic: see
     /// [`quantize_straight_with`](Self::quantize_straight_with).
     pub fn quantize_straight(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl(mask, true)
+        self.quantize_impl::<Unbiased>(mask, true)
     }
 
     /// Validate and quantize straight-color fragments, as [`crate::Fragment::straight`] then
     /// [`Arithmetic::quantize`] would (`color * alpha`, one f32 multiply).
     pub fn quantize_straight_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl(mask, true)
+        self.quantize_impl::<A>(mask, true)
     }
 
-    fn quantize_impl(&self, mask: u8, straight: bool) -> QuantizedLanes {
+    fn quantize_impl<A: Arithmetic>(&self, mask: u8, straight: bool) -> QuantizedLanes {
         let zero = f32x8::ZERO;
         let one = f32x8::ONE;
         let alpha = f32x8::new(self.alpha);
@@ -709,8 +709,15 @@ impl FragmentLanes {
             };
             ok &= out.simd_ge(zero) & out.simd_le(one);
         }
-        // Both arithmetics quantize to nearest ([`Arithmetic::quantize`]).
-        let u = f32x8::splat(0.5);
+        let half = f32x8::splat(0.5);
+        let u = match A::KIND {
+            Kind::Paper => half,
+            // Faint fragments dithered, the others to nearest (as `Unbiased::quantize`).
+            Kind::Unbiased => {
+                let faint = (alpha * f32x8::splat(255.0)).simd_lt(f32x8::splat(crate::arith::FAINT_BYTES));
+                faint.select(fragment_dither8(pre, alpha, depth), half)
+            }
+        };
         let bytes = pre.map(|c| quantize8(c, u));
         let t = u32x8::splat(255) - quantize8(alpha, u);
         let rgbt: [u32; LANES] = cast(bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24));
@@ -729,6 +736,17 @@ impl FragmentLanes {
             invalid: mask & !valid,
         }
     }
+}
+
+/// [`crate::arith::fragment_dither`] for 8 lanes (16-bit mix in the low slot of each dword).
+#[inline(always)]
+fn fragment_dither8(pre: [f32x8; 3], alpha: f32x8, depth: f32x8) -> f32x8 {
+    let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
+    let x = bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth);
+    let s: u16x16 = cast((x ^ (x >> 16)) & u32x8::splat(0xffff));
+    let s: u16x16 = s * K;
+    let h = cast::<u16x16, u32x8>(s >> 8) & u32x8::splat(0xff);
+    (f32x8::from_u(h) + f32x8::splat(0.5)) * f32x8::splat(1.0 / 256.0)
 }
 
 /// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`);
