@@ -19,8 +19,9 @@
 //! - Fragments are validated once ([`Fragment`], typed [`FragmentError`]) and quantized once.
 //! - The merge is exact unorm8 integer arithmetic, reproducible on any machine and in a
 //!   shader, in one of two arithmetics ([`arith`]), a type parameter of every kernel type:
-//!   [`Unbiased`] (the default: a dithered merge, no transmittance stall on many faint
-//!   layers, and a tail that does not saturate on dense content) or [`Paper`] (the paper's
+//!   [`Unbiased`] (the default: a dithered merge and dithered faint fragments, no
+//!   transmittance stall on many faint layers, and a tail that does not saturate on dense
+//!   content) or [`Paper`] (the paper's
 //!   round-to-nearest and 3 x 10-bit tail, bit for bit): `BlendingArray<4>` is
 //!   `BlendingArray<4, Unbiased>`; `BlendingArray<4, Paper>` is the paper's.
 //!
