@@ -45,7 +45,12 @@ impl core::fmt::Display for FragmentError {
 
 impl core::error::Error for FragmentError {}
 
-/// A validated transparent fragment: premultiplied color, alpha (coverage) and depth.
+/// A validated transparent fragment: premultiplied linear color, alpha (coverage) and depth.
+///
+/// Colors are **linear** (not sRGB-encoded): convert sRGB texture or vertex colors to
+/// linear before building a fragment. Constructors take glam's [`Vec3`]/[`Vec4`] (the
+/// `glam` re-exported as `mlab::glam`) or plain arrays (`*_rgb`, `*_rgba`), so a renderer on
+/// another glam version passes `v.to_array()`.
 ///
 /// Invariants (checked by every constructor): color channels finite and in `[0, 1]`
 /// (premultiplied; they may exceed alpha, which makes the fragment partly additive), alpha
@@ -62,11 +67,12 @@ impl core::error::Error for FragmentError {}
 /// `1e-7`).
 ///
 /// ```
-/// use glam::Vec3;
+/// use mlab::glam::Vec3;
 /// use mlab::{Fragment, FragmentError, Row};
 /// let f = Fragment::straight(Vec3::new(1.0, 0.5, 0.0), 0.5, 2.0)?;
 /// assert_eq!(f.row(), Row::new([128, 64, 0], 127, 2.0));
 /// assert_eq!(Fragment::premultiplied(Vec3::ONE, 1.5, 2.0), Err(FragmentError::AlphaOutOfRange));
+/// assert_eq!(Fragment::straight_rgba([1.0, 0.5, 0.0, 0.5], 2.0)?, f);
 /// # Ok::<(), FragmentError>(())
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -152,6 +158,29 @@ impl Fragment {
             alpha,
             depth,
         })
+    }
+
+    /// [`premultiplied`](Self::premultiplied) from a plain `[R, G, B]` array (no glam type
+    /// needed: any glam version's `Vec3::to_array()` gives one).
+    pub fn premultiplied_rgb(color: [f32; 3], alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        Fragment::premultiplied(Vec3::from_array(color), alpha, depth)
+    }
+
+    /// [`straight`](Self::straight) from a plain `[R, G, B]` array.
+    pub fn straight_rgb(color: [f32; 3], alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        Fragment::straight(Vec3::from_array(color), alpha, depth)
+    }
+
+    /// A fragment from premultiplied `[R, G, B, A]` (color already multiplied by alpha).
+    pub fn premultiplied_rgba(rgba: [f32; 4], depth: f32) -> Result<Fragment, FragmentError> {
+        let [r, g, b, a] = rgba;
+        Fragment::premultiplied(Vec3::new(r, g, b), a, depth)
+    }
+
+    /// A fragment from straight `[R, G, B, A]` (color not multiplied by alpha).
+    pub fn straight_rgba(rgba: [f32; 4], depth: f32) -> Result<Fragment, FragmentError> {
+        let [r, g, b, a] = rgba;
+        Fragment::straight(Vec3::new(r, g, b), a, depth)
     }
 
     /// A fragment from premultiplied RGBA (`xyz` = premultiplied color, `w` = alpha).

@@ -642,8 +642,55 @@ pub fn hybrid_insert_parts<T: TailFormat, const K: usize>(
     }
 }
 
-/// Eight fragments, structure of arrays (premultiplied color unless quantized with
-/// [`FragmentLanes::quantize_straight`]).
+/// The lanes of a span insert of fragments that were on but invalid (NaN, infinite or out
+/// of range, as [`crate::Fragment`]'s constructors refuse them): they were **not** inserted.
+/// Bit `i` = lane `i`. Compares with a `u8` mask (`invalid == 0`).
+#[must_use = "the lanes in this mask were not inserted: check it (`is_empty`) or count them"]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct InvalidLanes(pub u8);
+
+impl InvalidLanes {
+    /// The mask, bit `i` = lane `i`.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
+    /// No lane was invalid.
+    pub const fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// How many lanes were invalid.
+    pub const fn count(self) -> u32 {
+        self.0.count_ones()
+    }
+}
+
+impl PartialEq<u8> for InvalidLanes {
+    fn eq(&self, other: &u8) -> bool {
+        self.0 == *other
+    }
+}
+
+impl From<InvalidLanes> for u8 {
+    fn from(v: InvalidLanes) -> u8 {
+        v.0
+    }
+}
+
+/// Eight fragments, structure of arrays, linear color: premultiplied for
+/// [`quantize`](Self::quantize) and the `insert_*_fragments` functions, straight for
+/// [`quantize_straight`](Self::quantize_straight) (and
+/// [`Framebuffer::insert_span_straight`](crate::Framebuffer::insert_span_straight)).
+///
+/// ```
+/// use mlab::lanes::FragmentLanes;
+/// let straight = FragmentLanes::from_rgba([[1.0, 0.5, 0.0, 0.5]; 8], [2.0; 8]);
+/// let q = straight.quantize_straight(0xff);
+/// assert_eq!(q.valid, 0xff);
+/// let pre = FragmentLanes::from_fn(|lane| ([0.5, 0.25, 0.0], 0.5, 2.0 + lane as f32));
+/// assert_eq!(pre.depth[7], 9.0);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FragmentLanes {
     /// `color[channel][lane]`, channels R, G, B.
@@ -655,6 +702,7 @@ pub struct FragmentLanes {
 }
 
 /// Rows quantized from [`FragmentLanes`], and which lanes were valid.
+#[must_use = "lanes in `invalid` were refused: insert `rows` with the mask `valid`"]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct QuantizedLanes {
     /// The rows (lanes not in `valid` hold [`Row::EMPTY`]).
@@ -667,6 +715,54 @@ pub struct QuantizedLanes {
 }
 
 impl FragmentLanes {
+    /// Eight fragments from `[R, G, B, A]` per lane and a depth per lane (premultiplied or
+    /// straight: the quantizer you call decides).
+    pub fn from_rgba(rgba: [[f32; 4]; LANES], depth: [f32; LANES]) -> FragmentLanes {
+        FragmentLanes {
+            color: core::array::from_fn(|c| core::array::from_fn(|lane| rgba[lane][c])),
+            alpha: core::array::from_fn(|lane| rgba[lane][3]),
+            depth,
+        }
+    }
+
+    /// Eight fragments from `(color [R, G, B], alpha, depth)` per lane.
+    pub fn from_fn(mut f: impl FnMut(usize) -> ([f32; 3], f32, f32)) -> FragmentLanes {
+        let mut out = FragmentLanes::TRANSPARENT;
+        for lane in 0..LANES {
+            let (c, a, z) = f(lane);
+            for (ch, v) in out.color.iter_mut().zip(c) {
+                ch[lane] = v;
+            }
+            out.alpha[lane] = a;
+            out.depth[lane] = z;
+        }
+        out
+    }
+
+    /// Up to eight fragments from slices of `[R, G, B, A]` and depths (the shorter length
+    /// counts); returns the lanes and the mask of the lanes filled (`(1 << n) - 1`). Lanes
+    /// past the slices are [`TRANSPARENT`](Self::TRANSPARENT) and off.
+    pub fn from_slices(rgba: &[[f32; 4]], depth: &[f32]) -> (FragmentLanes, u8) {
+        let n = rgba.len().min(depth.len()).min(LANES);
+        let mut out = FragmentLanes::TRANSPARENT;
+        for (lane, (c, z)) in rgba.iter().zip(depth).take(n).enumerate() {
+            for (ch, v) in out.color.iter_mut().zip(c) {
+                ch[lane] = *v;
+            }
+            out.alpha[lane] = c[3];
+            out.depth[lane] = *z;
+        }
+        (out, ((1u16 << n) - 1) as u8)
+    }
+
+    /// Eight fully transparent black fragments at depth 0 (valid; a placeholder for lanes
+    /// that are off).
+    pub const TRANSPARENT: FragmentLanes = FragmentLanes {
+        color: [[0.0; LANES]; 3],
+        alpha: [0.0; LANES],
+        depth: [0.0; LANES],
+    };
+
     /// Validate and quantize premultiplied fragments in the default arithmetic
     /// ([`Unbiased`]): see [`quantize_with`](Self::quantize_with).
     pub fn quantize(&self, mask: u8) -> QuantizedLanes {
@@ -760,7 +856,11 @@ fn quantize8(v: f32x8, u: f32x8) -> u32x8 {
 /// Validate, quantize and insert (Listing 1) one fragment per lane in the default
 /// arithmetic; returns the lanes that were on but invalid (left untouched).
 #[inline]
-pub fn mlab_insert_fragments<const M: usize>(span: &mut MlabSpan<M>, fragments: &FragmentLanes, mask: u8) -> u8 {
+pub fn mlab_insert_fragments<const M: usize>(
+    span: &mut MlabSpan<M>,
+    fragments: &FragmentLanes,
+    mask: u8,
+) -> InvalidLanes {
     mlab_insert_fragments_with::<Unbiased, M>(span, fragments, mask)
 }
 
@@ -770,10 +870,10 @@ pub fn mlab_insert_fragments_with<A: Arithmetic, const M: usize>(
     span: &mut MlabSpan<M>,
     fragments: &FragmentLanes,
     mask: u8,
-) -> u8 {
+) -> InvalidLanes {
     let q = fragments.quantize_with::<A>(mask);
     mlab_insert_with::<A, M>(span, &q.rows, q.valid);
-    q.invalid
+    InvalidLanes(q.invalid)
 }
 
 /// Validate, quantize and insert (Listing 2) one fragment per lane; returns the invalid lanes.
@@ -782,10 +882,10 @@ pub fn hybrid_insert_fragments<const K: usize, A: Arithmetic>(
     span: &mut HybridSpan<K, A>,
     fragments: &FragmentLanes,
     mask: u8,
-) -> u8 {
+) -> InvalidLanes {
     let q = fragments.quantize_with::<A>(mask);
     hybrid_insert(span, &q.rows, q.valid);
-    q.invalid
+    InvalidLanes(q.invalid)
 }
 
 // ---------------------------------------------------------------------------------------

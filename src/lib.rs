@@ -5,25 +5,42 @@
 //! I3D 2014) and Hybrid Transparency (HT; Maule et al. 2013, in the single-pass form of
 //! the same paper), over packed 8-byte rows.
 //!
-//! | type | what | size |
-//! |---|---|---|
-//! | [`Row`] | premultiplied RGB8 + transmittance T8 + depth f32 | 8 bytes, align 8 |
-//! | [`Tail`] | HT tail: color sums 3 x 13 bit, alpha sum 14 bit, count 11 bit | 8 bytes, align 8 |
-//! | [`hybrid::PaperTail`] | the paper's HT tail: 3 x 10, 16, 16 bit | 8 bytes, align 8 |
-//! | [`BlendingArray<M>`] | MLAB blending array, `M >= 1` rows | `8 * M` bytes |
-//! | [`Hybrid<K>`] | HT: `K` head rows + tail | `8 * (K + 1)` bytes |
-//! | [`MlabFramebuffer`], [`HybridFramebuffer`] | views over caller-owned `&mut [Row]` | none |
+//! # Which level for which renderer
 //!
-//! - [`mlab::insert`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
-//!   [`resolve_rows`] is Eq. 5 and [`Resolved::over`] Eq. 6.
-//! - Fragments are validated once ([`Fragment`], typed [`FragmentError`]) and quantized once.
-//! - The merge is exact unorm8 integer arithmetic, reproducible on any machine and in a
-//!   shader, in one of two arithmetics ([`arith`]), a type parameter of every kernel type:
-//!   [`Unbiased`] (the default: a dithered merge and dithered faint fragments, no
-//!   transmittance stall on many faint layers, and a tail that does not saturate on dense
-//!   content) or [`Paper`] (the paper's
-//!   round-to-nearest and 3 x 10-bit tail, bit for bit): `BlendingArray<4>` is
-//!   `BlendingArray<4, Unbiased>`; `BlendingArray<4, Paper>` is the paper's.
+//! | your renderer | use | example |
+//! |---|---|---|
+//! | one pixel, or your own storage per pixel (a shader port, a ray tracer) | [`BlendingArray`], [`Hybrid`] | [pixel](#a-pixel) |
+//! | fragments arrive one pixel at a time, in any order, read back per pixel | [`MlabFramebuffer`], [`HybridFramebuffer`] ([`Framebuffer`]) | [framebuffer](#a-framebuffer) |
+//! | a rasterizer that emits one pixel at a time (scanline, tile, `euc`-like) | [`SpanBatcher`] over a [`SpanFramebuffer`] | [batcher](#a-rasterizer-one-pixel-at-a-time) |
+//! | a rasterizer that shades 8 pixels of a line at once | [`SpanFramebuffer`], [`HybridSpanFramebuffer`] span inserts | [spans](#a-rasterizer-8-pixels-at-a-time) |
+//! | quality chosen at run time (a settings menu) | [`DynFramebuffer`] with [`Layers`] | [run time](#quality-at-run-time) |
+//! | your own span storage, your own loops | [`lanes`]: `mlab_insert_with`, `hybrid_insert_parts`, resolves | [`lanes`] |
+//!
+//! All framebuffers implement the [`Framebuffer`] trait (bring it into scope: `use
+//! mlab::Framebuffer;`): pixel and span inserts, resolves to f32, premultiplied RGBA,
+//! RGBA8 and RGBA16F, bands for threads, byte and word views for a GPU upload. The span
+//! arrangement is the fast one (inserts and resolves in SIMD lanes without a transpose);
+//! the pixel-major one keeps each pixel's rows together (`[Row; M]`).
+//!
+//! **Colors** are linear everywhere: fragment colors (premultiplied unless a constructor
+//! says straight) and every output. [`to_rgba8`] and [`Framebuffer::resolve_rgba8`] write
+//! linear unorm8 (`floor(v * 255 + 0.5)`), **not** sRGB-encoded bytes: upload them to a
+//! linear `Rgba8Unorm` target, or resolve to f32 or RGBA16F and encode for display.
+//!
+//! **"Row"** means the paper's 8-byte layer of one pixel ([`Row`]: premultiplied RGB8,
+//! transmittance, depth), never a line of the image; lines are `y`.
+//!
+//! **Errors**: [`Fragment`]'s constructors return [`FragmentError`], framebuffer
+//! operations [`FramebufferError`]; both convert into [`Error`], so `?` works in a function
+//! returning `Result<_, mlab::Error>`. Span inserts of fragments return the lanes they
+//! refused ([`InvalidLanes`], `#[must_use]`).
+//!
+//! **glam**: the glam types at the API (`Vec3`, `Vec4`) are this crate's glam, re-exported
+//! as [`mlab::glam`](glam); write `use mlab::glam::Vec3;`. A renderer on another glam
+//! version passes plain arrays ([`Fragment::straight_rgb`], [`Fragment::premultiplied_rgba`],
+//! [`FragmentLanes::from_rgba`]).
+//!
+//! ## A pixel
 //!
 //! ```
 //! use mlab::glam::Vec3;
@@ -39,13 +56,109 @@
 //! # Ok::<(), mlab::FragmentError>(())
 //! ```
 //!
-//! See `docs/layout.md` and `docs/algorithm.md` in the repository.
+//! ## A framebuffer
+//!
+//! ```
+//! use mlab::{Background, Fragment, Framebuffer, MlabFramebuffer, Row};
+//!
+//! let (w, h) = (320, 240);
+//! let mut storage = vec![Row::EMPTY; MlabFramebuffer::<4>::rows_needed(w, h)?];
+//! let mut fb = MlabFramebuffer::<4>::new_cleared(&mut storage, w, h)?;
+//! fb.insert(10, 20, &Fragment::straight_rgb([1.0, 0.0, 0.0], 0.5, 2.0)?)?;
+//! fb.insert(10, 20, &Fragment::straight_rgb([0.0, 0.0, 1.0], 0.5, 1.0)?)?;
+//! let mut out = vec![[0u8; 4]; (w * h) as usize];
+//! fb.resolve_rgba8(&mut out, Background::Transparent)?; // premultiplied, linear
+//! let alpha = out[20 * 320 + 10][3]; // 1 - 0.5 * 0.5, within one rounding of the merge
+//! assert!((191..=192).contains(&alpha));
+//! # Ok::<(), mlab::Error>(())
+//! ```
+//!
+//! ## A rasterizer, one pixel at a time
+//!
+//! ```
+//! use mlab::{Background, Fragment, Framebuffer, Row, SpanBatcher, SpanFramebuffer};
+//!
+//! let (w, h) = (64, 64);
+//! let mut storage = vec![Row::EMPTY; SpanFramebuffer::<4>::rows_needed(w, h)?];
+//! let mut fb = SpanFramebuffer::<4>::new_cleared(&mut storage, w, h)?;
+//! let mut batch = SpanBatcher::new(&mut fb);
+//! for y in 8..24 {
+//!     for x in 8..40 {
+//!         // What your rasterizer emits, pixel by pixel.
+//!         batch.insert(x, y, &Fragment::straight_rgba([0.2, 0.8, 0.2, 0.5], 3.0)?)?;
+//!     }
+//! }
+//! batch.finish()?;
+//! let mut out = vec![mlab::glam::Vec4::ZERO; (w * h) as usize];
+//! fb.resolve_into(&mut out, Background::Opaque(mlab::glam::Vec3::ONE))?;
+//! # Ok::<(), mlab::Error>(())
+//! ```
+//!
+//! `examples/rasterizer.rs` is a complete one: a triangle rasterizer, a transparent mesh,
+//! a PNG, and the PSNR against the exact A-buffer.
+//!
+//! ## A rasterizer, 8 pixels at a time
+//!
+//! ```
+//! use mlab::{Framebuffer, FragmentLanes, HybridSpanFramebuffer, Row};
+//!
+//! let mut storage = vec![Row::EMPTY; HybridSpanFramebuffer::<3>::rows_needed(100, 10)?];
+//! let mut fb = HybridSpanFramebuffer::<3>::new_cleared(&mut storage, 100, 10)?;
+//! // Straight color per lane, alpha, depth; lane 2 is NaN and is refused.
+//! let mut frags = FragmentLanes::from_rgba([[1.0, 0.5, 0.0, 0.5]; 8], [4.0; 8]);
+//! frags.depth[2] = f32::NAN;
+//! let invalid = fb.insert_span_straight(96, 3, &frags, 0b0000_1111)?; // x = 96..100
+//! assert_eq!(invalid, 0b0000_0100);
+//! # Ok::<(), mlab::Error>(())
+//! ```
+//!
+//! ## Quality at run time
+//!
+//! ```
+//! use mlab::{DynFramebuffer, Fragment, Framebuffer, Layers, Row};
+//!
+//! let quality = Layers::Hybrid(3); // or Layers::Mlab(1, 2, 3, 4, 6 or 8)
+//! let mut storage = vec![Row::EMPTY; quality.rows_needed(64, 64)?];
+//! let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(quality, &mut storage, 64, 64)?;
+//! fb.insert(1, 2, &Fragment::premultiplied_rgba([0.1, 0.1, 0.1, 0.2], 1.0)?)?;
+//! # Ok::<(), mlab::Error>(())
+//! ```
+//!
+//! # The kernel
+//!
+//! | type | what | size |
+//! |---|---|---|
+//! | [`Row`] | premultiplied RGB8 + transmittance T8 + depth f32 | 8 bytes, align 8 |
+//! | [`Tail`] | HT tail: color sums 3 x 13 bit, alpha sum 14 bit, count 11 bit | 8 bytes, align 8 |
+//! | [`hybrid::PaperTail`] | the paper's HT tail: 3 x 10, 16, 16 bit | 8 bytes, align 8 |
+//! | [`BlendingArray<M>`] | MLAB blending array, `M >= 1` rows | `8 * M` bytes |
+//! | [`Hybrid<K>`] | HT: `K` head rows + tail | `8 * (K + 1)` bytes |
+//! | framebuffers, [`SpanBatcher`] | views over caller-owned `&mut [Row]`; a fixed-size batcher | none; 18 KiB |
+//!
+//! - [`mlab::insert`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
+//!   [`resolve_rows`] is Eq. 5 and [`Resolved::over`] Eq. 6. The module `mlab::mlab` is
+//!   named after the method, as `mlab::hybrid` is: its functions are written with the path
+//!   (`mlab::mlab::insert`), the crate root re-exports its type ([`BlendingArray`]).
+//! - Fragments are validated once ([`Fragment`], typed [`FragmentError`]) and quantized once.
+//! - The merge is exact unorm8 integer arithmetic, reproducible on any machine and in a
+//!   shader, in one of two arithmetics ([`arith`]), a type parameter of every kernel type:
+//!   [`Unbiased`] (the default: a dithered merge and dithered faint fragments, no
+//!   transmittance stall on many faint layers, and a tail that does not saturate on dense
+//!   content) or [`Paper`] (the paper's
+//!   round-to-nearest and 3 x 10-bit tail, bit for bit): `BlendingArray<4>` is
+//!   `BlendingArray<4, Unbiased>`; `BlendingArray<4, Paper>` is the paper's.
+//!
+//! The documents named here (`docs/layout.md`, `docs/algorithm.md`, `docs/performance.md`,
+//! ...) are in the crate's source, beside `src/`.
 
 #![no_std]
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
 pub mod arith;
+pub mod batch;
+pub mod dynamic;
+pub mod error;
 pub mod fragment;
 pub mod framebuffer;
 pub mod hybrid;
@@ -57,9 +170,13 @@ pub mod spans;
 pub mod unorm;
 
 pub use arith::{Arithmetic, Paper, Unbiased};
+pub use batch::SpanBatcher;
+pub use dynamic::{DynFramebuffer, Layers};
+pub use error::Error;
 pub use fragment::{Fragment, FragmentError};
-pub use framebuffer::{FramebufferError, HybridFramebuffer, MlabFramebuffer};
+pub use framebuffer::{Framebuffer, FramebufferError, HybridFramebuffer, MlabFramebuffer};
 pub use hybrid::{Hybrid, Tail, TailFormat};
+pub use lanes::{FragmentLanes, InvalidLanes};
 pub use mlab::BlendingArray;
 pub use resolve::{Background, Resolved, resolve_rows, to_rgba8, to_rgba16f};
 pub use row::Row;

@@ -121,7 +121,7 @@ pub(crate) fn insert_lanes<A: Arithmetic, L: RowLanes, S: Slot<L>, const M: usiz
 /// `M = 0` is a compile-time error.
 ///
 /// ```
-/// use glam::Vec3;
+/// use mlab::glam::Vec3;
 /// use mlab::{BlendingArray, Fragment};
 /// let mut b = BlendingArray::<2>::new();
 /// // Three fragments out of order into two rows: the back two are merged.

@@ -23,7 +23,7 @@
 //!
 //! ```
 //! use mlab::lanes::FragmentLanes;
-//! use mlab::{Background, Row, SpanFramebuffer};
+//! use mlab::{Background, Framebuffer, Row, SpanFramebuffer};
 //! let (w, h) = (13, 2); // not a multiple of 8: two spans per line, the second partial
 //! let mut storage = vec![Row::EMPTY; SpanFramebuffer::<4>::rows_needed(w, h)?];
 //! let mut fb = SpanFramebuffer::<4>::new_cleared(&mut storage, w, h)?;
@@ -36,19 +36,33 @@
 //! fb.resolve_rgba8(&mut out, Background::Opaque(mlab::glam::Vec3::ZERO))?;
 //! assert_eq!(out[13 + 9], [102, 0, 0, 255]);
 //! assert_eq!(out[13 + 8], [0, 0, 0, 255]);
-//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! # Ok::<(), mlab::Error>(())
 //! ```
-
-use glam::Vec4;
-use half::f16;
+//!
+//! Bands for threads ([`Framebuffer::bands_mut`]):
+//!
+//! ```
+//! use mlab::{Framebuffer, Row, SpanFramebuffer};
+//! let mut storage = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(20, 10)?];
+//! let mut fb = SpanFramebuffer::<2>::new_cleared(&mut storage, 20, 10)?;
+//! let bands: Vec<_> = fb.bands_mut(4).collect();
+//! assert_eq!(bands.iter().map(|b| b.height()).collect::<Vec<_>>(), [4, 4, 2]);
+//! std::thread::scope(|s| {
+//!     for mut band in bands {
+//!         s.spawn(move || band.insert_row(19, 0, Row::new([9, 9, 9], 0, 1.0)));
+//!     }
+//! });
+//! assert_eq!(fb.pixel(19, 8)?[0], Row::new([9, 9, 9], 0, 1.0));
+//! # Ok::<(), mlab::Error>(())
+//! ```
 
 use core::marker::PhantomData;
 
 use crate::arith::{Arithmetic, Unbiased};
-use crate::framebuffer::{Dims, FramebufferError};
+use crate::framebuffer::{Dims, Framebuffer, FramebufferError};
 use crate::hybrid::TailFormat;
-use crate::lanes::{self, FragmentLanes, LANES, MlabSpan};
-use crate::resolve::{Background, Resolved, to_rgba8, to_rgba16f};
+use crate::lanes::{self, LANES, MlabSpan, ResolvedLanes};
+use crate::resolve::{Background, Resolved, to_rgba8};
 use crate::row::Row;
 
 /// Geometry shared by both span framebuffers.
@@ -101,16 +115,11 @@ impl SpanDims {
     /// The one or two stored spans touched by a span operation at `(x, y)` with `mask`:
     /// `(span, shift, mask_in_first, mask_in_second)`. Lane `i` lands on lane `(i + shift) % 8`,
     /// of the first span if `i + shift < 8`, of the next one otherwise.
+    #[inline(always)]
     fn split(self, x: u32, y: u32, mask: u8) -> Result<(usize, usize, u8, u8), FramebufferError> {
-        if y >= self.height {
-            return Err(self.out_of_bounds(x, y));
-        }
+        self.plain().check_span(x, y, mask)?;
         if mask == 0 {
             return Ok((0, 0, 0, 0));
-        }
-        let last = x as u64 + 7 - mask.leading_zeros() as u64;
-        if last >= self.width as u64 {
-            return Err(self.out_of_bounds(last.min(u32::MAX as u64) as u32, y));
         }
         let shift = x as usize % LANES;
         let span = y as usize * self.spans + x as usize / LANES;
@@ -118,36 +127,11 @@ impl SpanDims {
         Ok((span, shift, wide as u8, (wide >> 8) as u8))
     }
 
-    fn check_output(self, len: usize) -> Result<(), FramebufferError> {
-        self.plain().check_output(len)
-    }
-
-    /// Write the 8 lanes of each span (`resolve(span index)`) into a row-major output of
-    /// `width * height` pixels, dropping padding lanes.
-    fn write_spans<T: Copy>(
-        self,
-        out: &mut [T],
-        resolve: impl Fn(usize) -> [T; LANES],
-    ) -> Result<(), FramebufferError> {
-        self.check_output(out.len())?;
-        if self.width == 0 {
-            return Ok(());
-        }
-        for (y, line) in out.chunks_exact_mut(self.width as usize).enumerate() {
-            for (sx, o) in line.chunks_mut(LANES).enumerate() {
-                let px = resolve(y * self.spans + sx);
-                o.copy_from_slice(&px[..o.len()]);
-            }
-        }
-        Ok(())
+    /// Stored span index of span `span` of line `y`, if both are inside.
+    fn index(self, span: u32, y: u32) -> Option<usize> {
+        ((span as usize) < self.spans && y < self.height).then(|| y as usize * self.spans + span as usize)
     }
 }
-
-/// Resolved lanes of nothing (only for spans that cannot exist: storage is checked).
-const CLEAR_LANES: lanes::ResolvedLanes = lanes::ResolvedLanes {
-    color: [[0.0; LANES]; 3],
-    transmittance: [1.0; LANES],
-};
 
 /// The lanes of a span insert, rotated so that lane `i` sits at `(i + shift) % 8`.
 fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
@@ -156,62 +140,9 @@ fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
     r
 }
 
-/// Constructors and accessors shared by both span framebuffers.
-macro_rules! span_common {
-    () => {
-        /// [`new`](Self::new), then [`clear`](Self::clear): the way to start a frame.
-        pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
-            let mut fb = Self::new(storage, width, height)?;
-            fb.clear();
-            Ok(fb)
-        }
-
-        /// Width in pixels.
-        pub fn width(&self) -> u32 {
-            self.dims.width
-        }
-
-        /// Height in pixels.
-        pub fn height(&self) -> u32 {
-            self.dims.height
-        }
-    };
-}
-
-/// The inserts both span framebuffers build on their `insert_span`.
-macro_rules! span_inserts {
-    () => {
-        /// Validate, quantize and insert one fragment per lane; returns the lanes that were on
-        /// but invalid (left untouched). Coordinates are checked first, for every lane that is on.
-        #[inline]
-        pub fn insert_span_fragments(
-            &mut self,
-            x: u32,
-            y: u32,
-            fragments: &FragmentLanes,
-            mask: u8,
-        ) -> Result<u8, FramebufferError> {
-            self.dims.split(x, y, mask)?;
-            let q = fragments.quantize_with::<A>(mask);
-            self.insert_span(x, y, &q.rows, q.valid)?;
-            Ok(q.invalid)
-        }
-
-        /// Insert one quantized row at `(x, y)`.
-        pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
-            let (_, lane) = self.dims.locate(x, y)?;
-            self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
-        }
-
-        /// Insert one fragment at `(x, y)`.
-        pub fn insert(&mut self, x: u32, y: u32, fragment: &crate::Fragment) -> Result<(), FramebufferError> {
-            self.insert_row(x, y, A::quantize(fragment))
-        }
-    };
-}
-
 /// An MLAB framebuffer in 8-pixel layer-major spans over borrowed storage (see the
-/// [module docs](self) for the arrangement), in the arithmetic `A` ([`Unbiased`] by default).
+/// [module docs](self) for the arrangement), in the arithmetic `A` ([`Unbiased`] by
+/// default). Its operations are those of [`Framebuffer`].
 #[derive(Debug)]
 pub struct SpanFramebuffer<'a, const M: usize, A: Arithmetic = Unbiased> {
     spans: &'a mut [MlabSpan<M>],
@@ -249,33 +180,12 @@ impl<'a, const M: usize, A: Arithmetic> SpanFramebuffer<'a, M, A> {
         })
     }
 
-    span_common!();
-
-    /// Every row empty (padding lanes included).
-    pub fn clear(&mut self) {
-        self.spans.fill([[Row::EMPTY; LANES]; M]);
+    /// [`new`](Self::new), then [`clear`](Framebuffer::clear): the way to start a frame.
+    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(storage, width, height)?;
+        fb.clear();
+        Ok(fb)
     }
-
-    /// Insert one row per lane at pixels `(x + i, y)` for the lanes set in `mask`
-    /// (Listing 1 in lanes). Errors if a lane that is on lies outside the framebuffer.
-    #[inline]
-    pub fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
-        let (span, shift, m0, m1) = self.dims.split(x, y, mask)?;
-        let rows = if shift == 0 { *rows } else { rotate(rows, shift) };
-        if m0 != 0
-            && let Some(s) = self.spans.get_mut(span)
-        {
-            lanes::mlab_insert_with::<A, M>(s, &rows, m0);
-        }
-        if m1 != 0
-            && let Some(s) = self.spans.get_mut(span + 1)
-        {
-            lanes::mlab_insert_with::<A, M>(s, &rows, m1);
-        }
-        Ok(())
-    }
-
-    span_inserts!();
 
     /// The blending array of pixel `(x, y)`.
     pub fn pixel(&self, x: u32, y: u32) -> Result<[Row; M], FramebufferError> {
@@ -284,43 +194,14 @@ impl<'a, const M: usize, A: Arithmetic> SpanFramebuffer<'a, M, A> {
         Ok(core::array::from_fn(|j| s[j][lane]))
     }
 
-    /// Resolve one pixel.
-    pub fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
-        self.pixel(x, y).map(|p| crate::resolve_rows(&p))
-    }
-
-    fn resolved_span(&self, i: usize) -> lanes::ResolvedLanes {
-        self.spans.get(i).map_or(CLEAR_LANES, lanes::mlab_resolve)
-    }
-
-    /// Resolve every pixel into RGBA8 (row-major, `width * height`), 8 lanes at a time.
-    pub fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
-        let clear = to_rgba8(Resolved::CLEAR.pixel(background));
-        self.dims.write_spans(out, |i| {
-            self.spans
-                .get(i)
-                .map_or([clear; LANES], |s| lanes::mlab_resolve_rgba8(s, background))
-        })
-    }
-
-    /// Resolve every pixel into f32 RGBA ([`Resolved::pixel`]).
-    pub fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
-        self.dims.write_spans(out, |i| self.resolved_span(i).pixels(background))
-    }
-
-    /// Resolve every pixel into RGBA16F.
-    pub fn resolve_rgba16f(&self, out: &mut [[f16; 4]], background: Background) -> Result<(), FramebufferError> {
-        self.dims
-            .write_spans(out, |i| self.resolved_span(i).pixels(background).map(to_rgba16f))
-    }
-
     /// Copy into the pixel-major arrangement of [`MlabFramebuffer`](crate::MlabFramebuffer)
     /// (`width * height * M` rows); padding lanes are dropped.
     pub fn to_pixel_major(&self, out: &mut [Row]) -> Result<(), FramebufferError> {
-        let out: &mut [[Row; M]] = pixel_major_slice(out, self.dims, M)?;
-        self.dims.write_spans(out, |i| {
-            self.spans
-                .get(i)
+        let d = self.dims;
+        let out: &mut [[Row; M]] = pixel_major_slice(out, d, M)?;
+        crate::framebuffer::write_spans(d.width, d.height, out, |s, y| {
+            d.index(s, y)
+                .and_then(|i| self.spans.get(i))
                 .map_or([[Row::EMPTY; M]; LANES], lanes::to_pixel_major)
         })
     }
@@ -349,53 +230,95 @@ impl<'a, const M: usize, A: Arithmetic> SpanFramebuffer<'a, M, A> {
         }
         Ok(())
     }
+}
 
-    /// Split into bands of `lines` lines (the last one may be shorter), each a framebuffer of
-    /// its own over its part of the storage, so that threads can own them. Band `b` covers
-    /// lines `b * lines ..`; coordinates inside a band are relative to its first line.
-    /// `lines == 0` yields no band.
-    ///
-    /// ```
-    /// use mlab::{Row, SpanFramebuffer};
-    /// let mut storage = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(20, 10)?];
-    /// let mut fb = SpanFramebuffer::<2>::new_cleared(&mut storage, 20, 10)?;
-    /// let bands: Vec<_> = fb.bands_mut(4).collect();
-    /// assert_eq!(bands.iter().map(|b| b.height()).collect::<Vec<_>>(), [4, 4, 2]);
-    /// std::thread::scope(|s| {
-    ///     for mut band in bands {
-    ///         s.spawn(move || band.insert_row(19, 0, Row::new([9, 9, 9], 0, 1.0)));
-    ///     }
-    /// });
-    /// assert_eq!(fb.pixel(19, 8)?[0], Row::new([9, 9, 9], 0, 1.0));
-    /// # Ok::<(), Box<dyn std::error::Error>>(())
-    /// ```
-    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = SpanFramebuffer<'_, M, A>> {
-        let d = self.dims;
-        let chunk = (d.spans * lines as usize).max(1);
-        let n = if lines == 0 || d.spans == 0 { 0 } else { usize::MAX };
-        self.spans.chunks_mut(chunk).take(n).map(move |spans| {
-            let height = (spans.len() / d.spans.max(1)) as u32;
-            SpanFramebuffer {
-                spans,
-                dims: SpanDims { height, ..d },
-                arithmetic: PhantomData,
-            }
-        })
+impl<'a, const M: usize, A: Arithmetic> Framebuffer for SpanFramebuffer<'a, M, A> {
+    type Arith = A;
+    type Band<'b>
+        = SpanFramebuffer<'b, M, A>
+    where
+        Self: 'b;
+
+    fn width(&self) -> u32 {
+        self.dims.width
     }
 
-    /// The storage as rows.
-    pub fn as_rows(&self) -> &[Row] {
+    fn height(&self) -> u32 {
+        self.dims.height
+    }
+
+    fn rows_per_pixel(&self) -> usize {
+        M
+    }
+
+    /// Every row empty (padding lanes included).
+    fn clear(&mut self) {
+        self.spans.fill([[Row::EMPTY; LANES]; M]);
+    }
+
+    fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        let (_, lane) = self.dims.locate(x, y)?;
+        self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
+    }
+
+    #[inline]
+    fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
+        let (span, shift, m0, m1) = self.dims.split(x, y, mask)?;
+        let rows = if shift == 0 { *rows } else { rotate(rows, shift) };
+        if m0 != 0
+            && let Some(s) = self.spans.get_mut(span)
+        {
+            lanes::mlab_insert_with::<A, M>(s, &rows, m0);
+        }
+        if m1 != 0
+            && let Some(s) = self.spans.get_mut(span + 1)
+        {
+            lanes::mlab_insert_with::<A, M>(s, &rows, m1);
+        }
+        Ok(())
+    }
+
+    fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+        self.pixel(x, y).map(|p| crate::resolve_rows(&p))
+    }
+
+    #[inline]
+    fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes> {
+        self.dims
+            .index(span, y)
+            .and_then(|i| self.spans.get(i))
+            .map(lanes::mlab_resolve)
+    }
+
+    #[inline]
+    fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
+        match self.dims.index(span, y).and_then(|i| self.spans.get(i)) {
+            Some(s) => lanes::mlab_resolve_rgba8(s, background),
+            None => [to_rgba8(Resolved::CLEAR.pixel(background)); LANES],
+        }
+    }
+
+    fn as_rows(&self) -> &[Row] {
         bytemuck::cast_slice(self.spans)
     }
 
-    /// The storage as bytes (8 per row).
-    pub fn as_bytes(&self) -> &[u8] {
-        bytemuck::cast_slice(self.spans)
+    fn reborrow(&mut self) -> SpanFramebuffer<'_, M, A> {
+        SpanFramebuffer {
+            spans: self.spans,
+            dims: self.dims,
+            arithmetic: PhantomData,
+        }
     }
 
-    /// The storage as native-endian `u32` words, two per row.
-    pub fn as_words(&self) -> &[u32] {
-        bytemuck::cast_slice(self.spans)
+    fn split_lines(self, lines: u32) -> (Self, Self) {
+        let lines = lines.min(self.dims.height);
+        let (a, b) = self.spans.split_at_mut(lines as usize * self.dims.spans);
+        let band = |spans, height| SpanFramebuffer {
+            spans,
+            dims: SpanDims { height, ..self.dims },
+            arithmetic: PhantomData,
+        };
+        (band(a, lines), band(b, self.dims.height - lines))
     }
 }
 
@@ -419,7 +342,8 @@ type SpanParts<'s, const K: usize, T> = (&'s [[Row; LANES]; K], &'s [T; LANES]);
 type SpanPartsMut<'s, const K: usize, T> = (&'s mut [[Row; LANES]; K], &'s mut [T; LANES]);
 
 /// A Hybrid Transparency framebuffer in 8-pixel spans: per span, `K` head layers of 8 rows,
-/// then the 8 tails in 8 row-sized slots (see the [module docs](self)).
+/// then the 8 tails in 8 row-sized slots (see the [module docs](self)). Its operations are
+/// those of [`Framebuffer`].
 #[derive(Debug)]
 pub struct HybridSpanFramebuffer<'a, const K: usize, A: Arithmetic = Unbiased> {
     rows: &'a mut [Row],
@@ -454,16 +378,11 @@ impl<'a, const K: usize, A: Arithmetic> HybridSpanFramebuffer<'a, K, A> {
         })
     }
 
-    span_common!();
-
-    /// Empty head rows and empty tails everywhere.
-    pub fn clear(&mut self) {
-        let empty_tail = Row::from_bytes(A::Tail::EMPTY.to_bytes());
-        for span in self.rows.chunks_exact_mut(Self::SPAN_ROWS) {
-            let (head, tails) = span.split_at_mut(K * LANES);
-            head.fill(Row::EMPTY);
-            tails.fill(empty_tail);
-        }
+    /// [`new`](Self::new), then [`clear`](Framebuffer::clear): the way to start a frame.
+    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(storage, width, height)?;
+        fb.clear();
+        Ok(fb)
     }
 
     /// Head layers and tails of stored span `i`.
@@ -482,9 +401,56 @@ impl<'a, const K: usize, A: Arithmetic> HybridSpanFramebuffer<'a, K, A> {
         Some((head.try_into().ok()?, bytemuck::cast_ref(tails)))
     }
 
-    /// Insert one row per lane at `(x + i, y)` for the lanes in `mask` (Listing 2 in lanes).
+    /// Head rows and tail of pixel `(x, y)`.
+    pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], A::Tail), FramebufferError> {
+        let (span, lane) = self.dims.locate(x, y)?;
+        let (head, tails) = self.span(span).ok_or(self.dims.out_of_bounds(x, y))?;
+        Ok((core::array::from_fn(|j| head[j][lane]), tails[lane]))
+    }
+
+    fn span(&self, i: usize) -> Option<SpanParts<'_, K, A::Tail>> {
+        self.rows
+            .get(i * Self::SPAN_ROWS..(i + 1) * Self::SPAN_ROWS)
+            .and_then(Self::parts)
+    }
+}
+
+impl<'a, const K: usize, A: Arithmetic> Framebuffer for HybridSpanFramebuffer<'a, K, A> {
+    type Arith = A;
+    type Band<'b>
+        = HybridSpanFramebuffer<'b, K, A>
+    where
+        Self: 'b;
+
+    fn width(&self) -> u32 {
+        self.dims.width
+    }
+
+    fn height(&self) -> u32 {
+        self.dims.height
+    }
+
+    fn rows_per_pixel(&self) -> usize {
+        K + 1
+    }
+
+    /// Empty head rows and empty tails everywhere.
+    fn clear(&mut self) {
+        let empty_tail = Row::from_bytes(A::Tail::EMPTY.to_bytes());
+        for span in self.rows.chunks_exact_mut(Self::SPAN_ROWS) {
+            let (head, tails) = span.split_at_mut(K * LANES);
+            head.fill(Row::EMPTY);
+            tails.fill(empty_tail);
+        }
+    }
+
+    fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        let (_, lane) = self.dims.locate(x, y)?;
+        self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane)
+    }
+
     #[inline]
-    pub fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
+    fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
         let (span, shift, m0, m1) = self.dims.split(x, y, mask)?;
         let rows = if shift == 0 { *rows } else { rotate(rows, shift) };
         for (i, m) in [(span, m0), (span + 1, m1)] {
@@ -497,79 +463,47 @@ impl<'a, const K: usize, A: Arithmetic> HybridSpanFramebuffer<'a, K, A> {
         Ok(())
     }
 
-    span_inserts!();
-
-    /// Head rows and tail of pixel `(x, y)`.
-    pub fn pixel(&self, x: u32, y: u32) -> Result<([Row; K], A::Tail), FramebufferError> {
-        let (span, lane) = self.dims.locate(x, y)?;
-        let (head, tails) = self.span(span).ok_or(self.dims.out_of_bounds(x, y))?;
-        Ok((core::array::from_fn(|j| head[j][lane]), tails[lane]))
-    }
-
-    /// Resolve one pixel.
-    pub fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+    fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
         self.pixel(x, y).map(|(h, t)| crate::hybrid::resolve(&h, t))
     }
 
-    fn span(&self, i: usize) -> Option<SpanParts<'_, K, A::Tail>> {
-        self.rows
-            .get(i * Self::SPAN_ROWS..(i + 1) * Self::SPAN_ROWS)
-            .and_then(Self::parts)
+    #[inline]
+    fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes> {
+        let (h, t) = self.dims.index(span, y).and_then(|i| self.span(i))?;
+        Some(lanes::hybrid_resolve_parts(h, t))
     }
 
-    fn resolved_span(&self, i: usize) -> lanes::ResolvedLanes {
-        self.span(i)
-            .map_or(CLEAR_LANES, |(h, t)| lanes::hybrid_resolve_parts(h, t))
-    }
-
-    /// Resolve every pixel into RGBA8, 8 lanes at a time.
-    pub fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
-        let clear = to_rgba8(Resolved::CLEAR.pixel(background));
-        self.dims.write_spans(out, |i| {
-            self.span(i).map_or([clear; LANES], |(h, t)| {
-                lanes::hybrid_resolve_parts_rgba8(h, t, background)
-            })
-        })
-    }
-
-    /// Resolve every pixel into f32 RGBA.
-    pub fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
-        self.dims.write_spans(out, |i| self.resolved_span(i).pixels(background))
-    }
-
-    /// Resolve every pixel into RGBA16F.
-    pub fn resolve_rgba16f(&self, out: &mut [[f16; 4]], background: Background) -> Result<(), FramebufferError> {
-        self.dims
-            .write_spans(out, |i| self.resolved_span(i).pixels(background).map(to_rgba16f))
-    }
-
-    /// Split into bands of `lines` lines, each a framebuffer over its part of the storage.
-    pub fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = HybridSpanFramebuffer<'_, K, A>> {
-        let d = self.dims;
-        let chunk = (d.spans * lines as usize * Self::SPAN_ROWS).max(1);
-        let n = if lines == 0 || d.spans == 0 { 0 } else { usize::MAX };
-        self.rows.chunks_mut(chunk).take(n).map(move |rows| {
-            let height = (rows.len() / (d.spans * Self::SPAN_ROWS).max(1)) as u32;
-            HybridSpanFramebuffer {
-                rows,
-                dims: SpanDims { height, ..d },
-                arithmetic: PhantomData,
-            }
-        })
+    #[inline]
+    fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
+        match self.dims.index(span, y).and_then(|i| self.span(i)) {
+            Some((h, t)) => lanes::hybrid_resolve_parts_rgba8(h, t, background),
+            None => [to_rgba8(Resolved::CLEAR.pixel(background)); LANES],
+        }
     }
 
     /// The storage as rows (tail slots hold [`Tail`](crate::Tail) bytes).
-    pub fn as_rows(&self) -> &[Row] {
+    fn as_rows(&self) -> &[Row] {
         self.rows
     }
 
-    /// The storage as bytes.
-    pub fn as_bytes(&self) -> &[u8] {
-        bytemuck::cast_slice(self.rows)
+    fn reborrow(&mut self) -> HybridSpanFramebuffer<'_, K, A> {
+        HybridSpanFramebuffer {
+            rows: self.rows,
+            dims: self.dims,
+            arithmetic: PhantomData,
+        }
     }
 
-    /// The storage as native-endian `u32` words.
-    pub fn as_words(&self) -> &[u32] {
-        bytemuck::cast_slice(self.rows)
+    fn split_lines(self, lines: u32) -> (Self, Self) {
+        let lines = lines.min(self.dims.height);
+        let (a, b) = self
+            .rows
+            .split_at_mut(lines as usize * self.dims.spans * Self::SPAN_ROWS);
+        let band = |rows, height| HybridSpanFramebuffer {
+            rows,
+            dims: SpanDims { height, ..self.dims },
+            arithmetic: PhantomData,
+        };
+        (band(a, lines), band(b, self.dims.height - lines))
     }
 }

@@ -1,6 +1,7 @@
 //! Property 8: every bad-input class returns its error; framebuffers refuse bad sizes and
 //! coordinates and change nothing when they do.
 
+use mlab::Framebuffer;
 use mlab::glam::{Vec3, Vec4};
 use mlab::{
     Arithmetic, Background, Fragment, FragmentError as E, FramebufferError, HybridFramebuffer, MlabFramebuffer, Row,

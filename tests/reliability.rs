@@ -2,6 +2,7 @@
 //! names are the row names), plus the reproducers of open kernel findings (`#[ignore]`d
 //! until the kernel owner fixes them; run them with `cargo test --test reliability -- --ignored`).
 
+use mlab::Framebuffer;
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::resolve::INV255;

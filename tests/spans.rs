@@ -4,6 +4,7 @@
 
 mod common;
 
+use mlab::Framebuffer;
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::lanes::{FragmentLanes, LANES};
@@ -228,7 +229,10 @@ fn out_of_bounds_lanes_are_refused_and_change_nothing() {
     };
     frags.depth[1] = f32::INFINITY;
     frags.alpha[2] = 2.0;
-    assert_eq!(fb.insert_span_fragments(0, 1, &frags, 0xff), Ok(0b110));
+    assert_eq!(
+        fb.insert_span_fragments(0, 1, &frags, 0xff),
+        Ok(mlab::InvalidLanes(0b110))
+    );
     assert!(fb.pixel(1, 1).unwrap()[0].is_empty());
     assert!(!fb.pixel(0, 1).unwrap()[0].is_empty());
     assert!(fb.insert_span_fragments(8, 1, &frags, 0xff).is_err());

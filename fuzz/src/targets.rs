@@ -3,6 +3,7 @@
 
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
+use mlab::Framebuffer;
 use mlab::{
     Background, BlendingArray, Fragment, FramebufferError, Hybrid, HybridFramebuffer, HybridSpanFramebuffer,
     MlabFramebuffer, Paper, Resolved, Row, SpanFramebuffer, hybrid, hybrid::PaperTail as Tail, mlab as mlab_mod, resolve_rows,

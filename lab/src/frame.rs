@@ -49,7 +49,7 @@ use crate::stream::{Frag, Stream};
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::lanes::{FragmentLanes, LANES};
-use mlab::{Background, Paper, Row, SpanFramebuffer, to_rgba8};
+use mlab::{Background, Framebuffer, Paper, Row, SpanFramebuffer, to_rgba8};
 use rayon::prelude::*;
 
 /// Lines per band when none is given: the fastest on the development machine for MLAB 4 at

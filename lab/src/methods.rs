@@ -19,7 +19,9 @@ use crate::stream::{Bins, Stream};
 use mlab::glam::Vec3;
 use mlab::half::f16;
 use mlab::lanes::{self, HybridSpan, LANES, ResolvedLanes};
-use mlab::{Arithmetic, Fragment, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased};
+use mlab::{
+    Arithmetic, Fragment, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased,
+};
 
 /// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
 /// visibility of the background (the product of transmittances the method ends up with).

@@ -2,7 +2,7 @@
 //! kernel and hand-computed cases.
 
 use mlab::hybrid::PaperTail;
-use mlab::{Arithmetic, HybridFramebuffer, Paper, Row, Unbiased};
+use mlab::{Arithmetic, Framebuffer, HybridFramebuffer, Paper, Row, Unbiased};
 use oit_lab::faint::{TailSums, depth, quantile, run_stream, spread, tail_sums};
 use oit_lab::methods::{Arith, Frame, Image, Method, hybrid_with};
 use oit_lab::metrics::{compare, compare_covered};

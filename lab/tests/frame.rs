@@ -2,7 +2,7 @@
 //! to one thread over the whole frame, for every band height and thread count tried.
 
 use mlab::glam::{Vec3, Vec4};
-use mlab::{Background, Paper, Row, SpanFramebuffer, to_rgba8};
+use mlab::{Background, Framebuffer, Paper, Row, SpanFramebuffer, to_rgba8};
 use oit_lab::frame::{CHUNK, Compositor, FrameMethod};
 use oit_lab::methods::{Frame, Method, Weight};
 use oit_lab::scenes::Scene;

@@ -1,0 +1,278 @@
+//! The span batcher, the span inserts of every arrangement and the run-time sizes against
+//! per-pixel inserts: byte-identical framebuffers for random streams (both arithmetics,
+//! MLAB and HT, pixel-major and span arrangements), and the pixel-major lanes resolve against
+//! the scalar per-pixel resolve, bit for bit.
+
+use mlab::glam::{Vec3, Vec4};
+use mlab::half::f16;
+use mlab::{
+    Arithmetic, Background, DynFramebuffer, Framebuffer, FramebufferError, HybridFramebuffer, HybridSpanFramebuffer,
+    Layers, MlabFramebuffer, Paper, Row, SpanBatcher, SpanFramebuffer, Unbiased, to_rgba8, to_rgba16f,
+};
+
+/// More iterations in release (as BLAKE3's tests do).
+const ROUNDS: usize = if cfg!(debug_assertions) { 6 } else { 40 };
+
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+    fn below(&mut self, n: u64) -> u64 {
+        self.next() % n.max(1)
+    }
+    fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// A stream of `(x, y, row)`: patches scanned line by line (as a rasterizer emits them),
+/// single random pixels, and repeats of one pixel, with depths that tie on purpose.
+fn stream<A: Arithmetic>(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<(u32, u32, Row)> {
+    let mut out = Vec::new();
+    while out.len() < n {
+        let row = |rng: &mut Rng| {
+            let z = if rng.below(4) == 0 { 1.0 } else { 10.0 * rng.unit() };
+            let f =
+                mlab::Fragment::straight(Vec3::new(rng.unit(), rng.unit(), rng.unit()), rng.unit(), z).expect("valid");
+            A::quantize(&f)
+        };
+        match rng.below(3) {
+            0 => {
+                let (x0, y0) = (rng.below(w as u64) as u32, rng.below(h as u64) as u32);
+                let (pw, ph) = (1 + rng.below(20) as u32, 1 + rng.below(6) as u32);
+                for y in y0..(y0 + ph).min(h) {
+                    for x in x0..(x0 + pw).min(w) {
+                        out.push((x, y, row(rng)));
+                    }
+                }
+            }
+            1 => out.push((rng.below(w as u64) as u32, rng.below(h as u64) as u32, row(rng))),
+            _ => {
+                let (x, y) = (rng.below(w as u64) as u32, rng.below(h as u64) as u32);
+                for _ in 0..1 + rng.below(5) {
+                    out.push((x, y, row(rng)));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Per-pixel inserts into `reference`, the batcher into `batched`, span inserts of the same
+/// stream split into single-lane spans into `spanned`: all three byte-identical to the
+/// reference, and every resolve of `batched` bit-identical to the scalar per-pixel resolve.
+fn check<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: &mut R, batched: &mut B, s: &[(u32, u32, Row)]) {
+    reference.clear();
+    batched.clear();
+    for &(x, y, row) in s {
+        reference.insert_row(x, y, row).expect("inside");
+    }
+    let mut batch = SpanBatcher::new(batched);
+    for &(x, y, row) in s {
+        batch.insert_row(x, y, row).expect("inside");
+    }
+    batch.finish().expect("flush");
+    let (w, h) = (reference.width(), reference.height());
+    for y in 0..h {
+        for x in 0..w {
+            assert_eq!(reference.resolve(x, y), batched.resolve(x, y), "pixel ({x}, {y})");
+        }
+    }
+    check_resolves(reference);
+    check_resolves(batched);
+}
+
+/// Every whole-framebuffer resolve against [`Framebuffer::resolve`] per pixel, exactly.
+fn check_resolves<F: Framebuffer>(fb: &F) {
+    let (w, h) = (fb.width(), fb.height());
+    let n = (w * h) as usize;
+    for bg in [Background::Opaque(Vec3::new(0.25, 0.5, 1.0)), Background::Transparent] {
+        let expect: Vec<Vec4> = (0..n as u32)
+            .map(|i| fb.resolve(i % w, i / w).expect("inside").pixel(bg))
+            .collect();
+        let mut f32s = vec![Vec4::ZERO; n];
+        fb.resolve_into(&mut f32s, bg).expect("size");
+        assert_eq!(f32s, expect);
+        let mut rgba8 = vec![[0u8; 4]; n];
+        fb.resolve_rgba8(&mut rgba8, bg).expect("size");
+        assert_eq!(rgba8, expect.iter().map(|&p| to_rgba8(p)).collect::<Vec<_>>());
+        let mut rgba16 = vec![[f16::ZERO; 4]; n];
+        fb.resolve_rgba16f(&mut rgba16, bg).expect("size");
+        let e16: Vec<_> = expect.iter().map(|&p| to_rgba16f(p)).collect();
+        assert_eq!(
+            rgba16.iter().map(|p| p.map(f16::to_bits)).collect::<Vec<_>>(),
+            e16.iter().map(|p| p.map(f16::to_bits)).collect::<Vec<_>>()
+        );
+    }
+}
+
+fn run<A: Arithmetic>() {
+    let mut rng = Rng(0x1234_5678_9abc_def1 ^ A::NAME.len() as u64);
+    for round in 0..ROUNDS {
+        // Widths that are and are not multiples of 8, and that exceed the batcher's window.
+        let (w, h) = [(8, 1), (13, 5), (67, 11), (130, 17), (3, 40)][round % 5];
+        let s = stream::<A>(&mut rng, w, h, 200 + 300 * (round % 4));
+        let mut a = vec![Row::EMPTY; (w * h * 4) as usize];
+        let mut b = vec![Row::EMPTY; SpanFramebuffer::<4>::rows_needed(w, h).expect("size")];
+        let mut c = vec![Row::EMPTY; (w * h * 4) as usize];
+        let mut reference = MlabFramebuffer::<4, A>::new(&mut a, w, h).expect("size");
+        check(
+            &mut reference,
+            &mut SpanFramebuffer::<4, A>::new(&mut b, w, h).expect("size"),
+            &s,
+        );
+        check(
+            &mut reference,
+            &mut MlabFramebuffer::<4, A>::new(&mut c, w, h).expect("size"),
+            &s,
+        );
+        assert_eq!(a, c, "pixel-major span inserts");
+
+        let mut a = vec![Row::EMPTY; (w * h * 3) as usize];
+        let mut b = vec![Row::EMPTY; HybridSpanFramebuffer::<2>::rows_needed(w, h).expect("size")];
+        let mut c = vec![Row::EMPTY; (w * h * 3) as usize];
+        let mut reference = HybridFramebuffer::<2, A>::new(&mut a, w, h).expect("size");
+        check(
+            &mut reference,
+            &mut HybridSpanFramebuffer::<2, A>::new(&mut b, w, h).expect("size"),
+            &s,
+        );
+        check(
+            &mut reference,
+            &mut HybridFramebuffer::<2, A>::new(&mut c, w, h).expect("size"),
+            &s,
+        );
+        assert_eq!(a, c, "pixel-major HT span inserts");
+
+        // M = 1 and K = 1 too (the smallest arrays merge on every second fragment).
+        let mut a = vec![Row::EMPTY; (w * h) as usize];
+        let mut b = vec![Row::EMPTY; (w * h) as usize];
+        check(
+            &mut MlabFramebuffer::<1, A>::new(&mut a, w, h).expect("size"),
+            &mut MlabFramebuffer::<1, A>::new(&mut b, w, h).expect("size"),
+            &s,
+        );
+        assert_eq!(a, b);
+    }
+}
+
+#[test]
+fn batcher_is_byte_identical_to_per_pixel_inserts_unbiased() {
+    run::<Unbiased>();
+}
+
+#[test]
+fn batcher_is_byte_identical_to_per_pixel_inserts_paper() {
+    run::<Paper>();
+}
+
+/// The stored bytes too, not only the resolves: span storage to pixel-major.
+#[test]
+fn batched_span_storage_equals_pixel_major_bytes() {
+    let mut rng = Rng(77);
+    let (w, h) = (45, 9);
+    let s = stream::<Unbiased>(&mut rng, w, h, 2000);
+    let mut a = vec![Row::EMPTY; (w * h * 3) as usize];
+    let mut fa = MlabFramebuffer::<3>::new_cleared(&mut a, w, h).expect("size");
+    for &(x, y, row) in &s {
+        fa.insert_row(x, y, row).expect("inside");
+    }
+    let mut b = vec![Row::EMPTY; SpanFramebuffer::<3>::rows_needed(w, h).expect("size")];
+    let mut fb = SpanFramebuffer::<3>::new_cleared(&mut b, w, h).expect("size");
+    {
+        let mut batch = SpanBatcher::new(&mut fb);
+        for &(x, y, row) in &s {
+            batch.insert_row(x, y, row).expect("inside");
+        }
+        assert!(batch.pending() > 0);
+        // Dropped without finish: the pending fragments are flushed by drop.
+    }
+    let mut back = vec![Row::EMPTY; (w * h * 3) as usize];
+    fb.to_pixel_major(&mut back).expect("size");
+    assert_eq!(back, a);
+}
+
+#[test]
+fn batcher_refuses_pixels_outside_and_keeps_nothing() {
+    let mut storage = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(10, 3).expect("size")];
+    let mut fb = SpanFramebuffer::<2>::new_cleared(&mut storage, 10, 3).expect("size");
+    let mut batch = SpanBatcher::new(&mut fb);
+    let row = Row::new([1, 2, 3], 100, 1.0);
+    assert!(matches!(
+        batch.insert_row(10, 0, row),
+        Err(FramebufferError::OutOfBounds { x: 10, y: 0, .. })
+    ));
+    assert!(batch.insert_row(0, 3, row).is_err());
+    assert!(batch.insert_row(u32::MAX, u32::MAX, row).is_err());
+    assert_eq!(batch.pending(), 0);
+    batch.insert_row(9, 2, row).expect("inside");
+    assert_eq!(batch.pending(), 1);
+    let fb = batch.framebuffer().expect("flush");
+    assert_eq!(fb.pixel(9, 2).expect("inside")[0], row);
+}
+
+/// Every run-time size: byte-identical to the compile-time type on the same stream.
+#[test]
+fn dyn_framebuffer_matches_the_compile_time_types() {
+    fn same<F: Framebuffer<Arith = Unbiased>>(layers: Layers, mut reference: F, s: &[(u32, u32, Row)]) {
+        let (w, h) = (reference.width(), reference.height());
+        let mut storage = vec![Row::EMPTY; layers.rows_needed(w, h).expect("size")];
+        let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut storage, w, h).expect("size");
+        assert_eq!(fb.layers(), layers);
+        reference.clear();
+        let mut batch = SpanBatcher::new(&mut fb);
+        for &(x, y, row) in s {
+            reference.insert_row(x, y, row).expect("inside");
+            batch.insert_row(x, y, row).expect("inside");
+        }
+        batch.finish().expect("flush");
+        assert_eq!(fb.as_bytes(), reference.as_bytes(), "{layers:?}");
+        check_resolves(&fb);
+        let heights: Vec<u32> = fb.bands_mut(4).map(|b| b.height()).collect();
+        assert_eq!(heights.iter().sum::<u32>(), h);
+    }
+    let mut rng = Rng(5);
+    let (w, h) = (21, 7);
+    let s = stream::<Unbiased>(&mut rng, w, h, 800);
+    macro_rules! sizes {
+        ($($n:literal)*) => {$(
+            let mut st = vec![Row::EMPTY; SpanFramebuffer::<$n>::rows_needed(w, h).expect("size")];
+            same(Layers::Mlab($n), SpanFramebuffer::<$n>::new(&mut st, w, h).expect("size"), &s);
+            let mut st = vec![Row::EMPTY; HybridSpanFramebuffer::<$n>::rows_needed(w, h).expect("size")];
+            same(Layers::Hybrid($n), HybridSpanFramebuffer::<$n>::new(&mut st, w, h).expect("size"), &s);
+        )*};
+    }
+    sizes!(1 2 3 4 6 8);
+    for bad in [0, 5, 7, 9, 100] {
+        assert_eq!(
+            Layers::Mlab(bad).rows_needed(8, 8),
+            Err(FramebufferError::UnsupportedLayers { rows: bad })
+        );
+        let mut st = vec![Row::EMPTY; 64];
+        assert!(DynFramebuffer::<Unbiased>::new(Layers::Hybrid(bad), &mut st, 8, 8).is_err());
+    }
+}
+
+/// Bands of the pixel-major framebuffers cover the lines in order.
+#[test]
+fn pixel_major_bands_split_the_storage() {
+    let (w, h) = (5, 7);
+    let mut storage = vec![Row::EMPTY; (w * h * 2) as usize];
+    let mut fb = HybridFramebuffer::<1>::new_cleared(&mut storage, w, h).expect("size");
+    for (b, mut band) in fb.bands_mut(3).enumerate() {
+        assert_eq!(band.height(), if b == 2 { 1 } else { 3 });
+        band.insert_row(4, 0, Row::new([b as u8, 0, 0], 0, 1.0))
+            .expect("inside");
+    }
+    assert_eq!(fb.bands_mut(0).count(), 0);
+    for b in 0..3u32 {
+        assert_eq!(
+            fb.pixel(4, 3 * b).expect("inside").0[0],
+            Row::new([b as u8, 0, 0], 0, 1.0)
+        );
+    }
+}
