@@ -1,15 +1,15 @@
 //! Checks shared by the targets. Each one panics (a libFuzzer crash) with a message that
 //! names the broken property.
 
-use mlab::{Fragment, FragmentError, Resolved, Row};
+use mlab::{Arithmetic, Fragment, FragmentError, Paper, Resolved, Row, Unbiased};
 
 use crate::input::{Ctor, RawFragment};
-use crate::reference::defects;
+use crate::reference::{DITHERED_QUANT_ERROR, Model, defects, is_faint, ref_quantize_dithered};
 
 /// Build the fragment with the kernel and check it against the defect model:
 /// `Ok` exactly when the arguments have no defect, otherwise one of their defects, with
 /// NaN reported first as documented; a valid fragment holds the given values bit for
-/// bit and quantizes within half a step. Returns the fragment when valid.
+/// bit and quantizes to the reference rows (see [`check_quantization`]). Returns the fragment when valid.
 pub fn validate(raw: &RawFragment) -> Option<Fragment> {
     let got = raw.build();
     let (d, exp) = defects(raw);
@@ -87,25 +87,69 @@ fn check_nan_first(raw: &RawFragment, e: FragmentError) {
     );
 }
 
-/// The row of a valid fragment: each byte within half a step (plus f32 rounding) of the
-/// exact value, depth bit for bit, and color bytes not above `255 - T` when the
-/// premultiplied color does not exceed alpha.
+/// The rows of a valid fragment: [`Fragment::row`] and `Paper::quantize` (to nearest),
+/// `Unbiased::quantize` (to nearest, dithered for faint fragments), each byte-equal to the
+/// reference quantization of its arithmetic ([`Model::ref_quantize`]); and
+/// `mlab::arith::quantize_dithered` byte-equal to the reference dithered quantization
+/// ([`ref_quantize_dithered`]); each checked with [`check_row`].
 pub fn check_quantization(f: &Fragment) {
-    let row = f.row();
+    let (c, a, z) = (f.color().to_array(), f.alpha(), f.depth());
+    let paper = f.row();
+    assert_eq!(Paper::quantize(f), paper, "{f:?}: Paper::quantize is not Fragment::row");
+    check_row(f, paper, Paper::ref_row(f), Paper::quant_error(a), Paper::NAME);
+    let unbiased = Unbiased::quantize(f);
+    check_row(
+        f,
+        unbiased,
+        Unbiased::ref_row(f),
+        Unbiased::quant_error(a),
+        Unbiased::NAME,
+    );
+    if !is_faint(a) {
+        assert_eq!(unbiased, paper, "{f:?}: not faint, but quantized unlike the paper's");
+    }
+    let dithered = mlab::arith::quantize_dithered(c, a, z);
+    check_row(
+        f,
+        dithered,
+        ref_quantize_dithered(c, a, z),
+        DITHERED_QUANT_ERROR,
+        "dithered",
+    );
+}
+
+/// A row quantized from a valid fragment: byte-equal to the reference row `expected`;
+/// each byte within `max_error` steps (half a step to nearest, `511/512` dithered), plus
+/// f32 rounding, of the exact value; a value within `1/1024` step of a byte quantizes to
+/// that byte (the dither lies in `[1/512, 511/512]`); depth bit for bit; and color bytes
+/// not above `255 - T` when the premultiplied color does not exceed alpha.
+pub fn check_row(f: &Fragment, row: Row, expected: Row, max_error: f64, name: &str) {
     let c = f.color().to_array();
+    assert_eq!(row, expected, "{f:?}: {name} quantization differs from the reference");
+    let bound = max_error + 1e-4;
+    let check_byte = |byte: u8, v: f32, what: &str| {
+        let exact = f64::from(v) * 255.0;
+        let err = (f64::from(byte) - exact).abs();
+        assert!(err <= bound, "{f:?} -> {row:?}: {name} {what} byte off by {err} steps");
+        if (exact - exact.round()).abs() <= 1.0 / 1024.0 {
+            assert_eq!(
+                f64::from(byte),
+                exact.round(),
+                "{f:?} -> {row:?}: {name} {what} not exact"
+            );
+        }
+    };
     for (byte, v) in row.color().into_iter().zip(c) {
-        let err = (f64::from(byte) - f64::from(v) * 255.0).abs();
-        assert!(err <= 0.5 + 1e-4, "{f:?} -> {row:?}: color byte off by {err} steps");
+        check_byte(byte, v, "color");
     }
     let opacity = 255 - row.transmittance();
-    let err = (f64::from(opacity) - f64::from(f.alpha()) * 255.0).abs();
-    assert!(err <= 0.5 + 1e-4, "{f:?} -> {row:?}: alpha byte off by {err} steps");
+    check_byte(opacity, f.alpha(), "alpha");
     assert_eq!(row.depth().to_bits(), f.depth().to_bits());
     assert!(!row.is_empty(), "{f:?}: a valid fragment became the empty row");
     if c.iter().all(|&v| v <= f.alpha()) {
         assert!(
             row.color().iter().all(|&b| b <= opacity),
-            "{f:?} -> {row:?}: color above alpha after quantization"
+            "{f:?} -> {row:?}: {name} color above alpha after quantization"
         );
     }
 }

@@ -40,7 +40,9 @@ pub const SPECIALS: [f32; 24] = [
     0.3,
 ];
 
-/// A cursor over the fuzzer's bytes.
+/// A cursor over the fuzzer's bytes (a clone reads the same bytes again: every target runs
+/// the rest of the input once per arithmetic).
+#[derive(Clone, Debug)]
 pub struct Input<'a> {
     data: &'a [u8],
 }

@@ -1,28 +1,39 @@
 //! The four fuzz targets. Each takes the raw fuzzer bytes; the first byte chooses the
-//! const parameters (rows per pixel), the rest is decoded by [`Input`].
+//! const parameters (rows per pixel), the rest is decoded by [`Input`]. Every target runs
+//! each input twice, once in each arithmetic of the kernel ([`Paper`], the paper's
+//! rounding and tail, and [`Unbiased`], the default: dithered rounding and the wide
+//! tail), against the reference model of that arithmetic ([`Model`]).
 
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
-use mlab::Framebuffer;
 use mlab::{
-    Background, BlendingArray, Fragment, FramebufferError, Hybrid, HybridFramebuffer, HybridSpanFramebuffer,
-    MlabFramebuffer, Paper, Resolved, Row, SpanFramebuffer, hybrid, hybrid::PaperTail as Tail, mlab as mlab_mod, resolve_rows,
-    to_rgba8,
-    to_rgba16f,
+    Arithmetic, Background, BlendingArray, Fragment, Framebuffer, FramebufferError, Hybrid, HybridFramebuffer,
+    HybridSpanFramebuffer, MlabFramebuffer, Paper, Resolved, Row, SpanFramebuffer, TailFormat, Unbiased, hybrid,
+    hybrid::PaperTail, mlab as mlab_mod, resolve_rows, to_rgba8, to_rgba16f,
 };
 
 use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan};
 
 use crate::check::{check_close, check_invariants, check_resolved, distinct_depths, invariants_hold, validate};
 use crate::input::Input;
-use crate::reference::{
-    RefMlab, composite_rows_f64, oracle, ref_bubble, ref_hybrid, ref_merge, ref_tail_bytes, ref_tail_fields, tail_f64,
-};
+use crate::reference::{Model, RefMlab, composite_rows_f64, oracle, ref_bubble, ref_hybrid, ref_tail_fields, tail_f64};
+
+/// The kernel's default arithmetic is [`Unbiased`]: `BlendingArray<M>` is
+/// `BlendingArray<M, Unbiased>` (a compile error here if the default changes).
+const _: fn(BlendingArray<1>) -> BlendingArray<1, Unbiased> = |a| a;
+
+/// True for the default arithmetic, whose entry points without a type parameter
+/// (`mlab::merge`, `lanes::mlab_insert`, `FragmentLanes::quantize`, ...) the targets
+/// check too.
+fn is_default<A: Arithmetic>() -> bool {
+    A::NAME == Unbiased::NAME
+}
 
 /// Most fragments per stream (longer inputs are cut).
 pub const MAX_FRAGMENTS: usize = 64;
 
-/// Largest color of a resolved HT tail: `1023 / 255` (the 10-bit sums), as documented.
+/// Largest color of a resolved paper HT tail: `1023 / 255` (the 10-bit sums), as
+/// documented (the targets use [`tail_color_limit`], which covers both tails).
 pub const TAIL_COLOR_MAX: f32 = 1023.0 / 255.0;
 
 /// `MLAB_FUZZ_STRICT=1`: also check what the kernel does not meet yet (finding F1b, the
@@ -33,10 +44,12 @@ pub fn strict() -> bool {
 }
 
 /// The limit the targets check for a resolved tail's color: the documented
-/// `1023 * (1/255)` in f32 (finding F1, the tail amplifying its light above it, was fixed in
-/// d37150f by clamping the factor `(1 - T_tail) / S_a` to 1).
-pub fn tail_color_limit() -> f32 {
-    1023.0 * (1.0 / 255.0)
+/// `COLOR_MAX * (1/255)` in f32 of the arithmetic's tail (`1023` for the paper's, `8191`
+/// for the wide one), with the color maximum taken from the reference layout. Finding F1,
+/// the tail amplifying its light above it, was fixed in d37150f by clamping the factor
+/// `(1 - T_tail) / S_a` to 1.
+pub fn tail_color_limit<A: Model>() -> f32 {
+    A::TAIL.max(0) as f32 * (1.0 / 255.0)
 }
 
 /// `(premultiplied color, alpha, depth)` of an accepted fragment, for the oracle.
@@ -49,25 +62,76 @@ fn occluding(frags: &[([f32; 3], f32, f32)]) -> bool {
     frags.iter().all(|(c, a, _)| c.iter().all(|v| v <= a))
 }
 
+/// Bound on the background visibility of fragments whose quantization errors (in steps,
+/// [`Model::quant_error`]) are `quant`, after `merges` merges, against the exact product
+/// of `1 - alpha`.
+///
+/// The stored visibility is the product of the rows' `T / 255`. Each quantization moves
+/// one factor by at most its error `q_i / 255` (0.5 step to nearest; `511/512` dithered,
+/// which the unbiased arithmetic does for faint fragments), and each merge replaces two
+/// factors by their rounded product, off by less than `A::MERGE_ERROR / 255` (0.5 step for
+/// the paper's rounding, 1 step for the dithered one); every other factor lies in
+/// `[0, 1]`, so each step moves the product by at most its own error (telescoping):
+/// `(sum q_i + merges A::MERGE_ERROR) / 255`. Plus `1e-5`: the f32 resolve (a few
+/// `2^-24`) and the f32 excess of the quantizations (`v * 255` and `+ u` each rounded once
+/// near 255: at most `2.3e-5` step, `9e-8` each, `6e-6` for 64 fragments). Paper:
+/// `(n + merges) 0.5 / 255`, within the `n / 255` the target checked before the
+/// arithmetics existed (`merges < n`); unbiased: each merge counts a whole step, each faint
+/// fragment `511/512`.
+fn visibility_bound<A: Model>(quant: &[f64], merges: usize) -> f64 {
+    (quant.iter().sum::<f64>() + merges as f64 * A::MERGE_ERROR) / 255.0 + 1e-5
+}
+
+/// Bound on a resolved pixel of fragments stored without any merge (MLAB with `n <= M`,
+/// HT with `n <= K`), all with premultiplied color not above alpha, against the f64
+/// oracle, each channel and the transmittance; `quant` are the fragments' quantization
+/// errors in steps ([`Model::quant_error`]).
+///
+/// The composite `C = sum_i c_i prod_(j<i) t_j` is multilinear in the colors `c_i` and
+/// transmittances `t_j`. Where `c_i <= 1 - t_i` for every `i` (true of the exact values,
+/// and of the quantized bytes, checked by `check_row`, so on the whole segment between
+/// them), `|dC/dc_i| = prod_(j<i) t_j <= 1` and
+/// `|dC/dt_j| = prod_(k<j) t_k * sum_(i>j) c_i prod_(j<k<i) t_k
+///  <= sum_(i>j) (1 - t_i) prod_(j<k<i) t_k = 1 - prod_(k>j) t_k <= 1`.
+/// So the color moves by at most the sum of the `n` color errors and of the `n - 1`
+/// transmittance errors of all fragments but the last, at most `2 sum q_i - min q_i`
+/// steps, and the transmittance (a product of `n` factors in `[0, 1]`) by `sum q_i`. No
+/// merge is involved. Paper: `(2n - 1) 0.5 / 255`, within the `n / 255` checked before;
+/// unbiased: the same unless some fragments are faint (`511/512` each instead of 0.5).
+/// Plus `1e-5` for the f32 resolve and quantization (as above).
+fn oracle_bound(quant: &[f64]) -> f64 {
+    let sum: f64 = quant.iter().sum();
+    let min = quant.iter().copied().fold(f64::INFINITY, f64::min);
+    let steps = if quant.is_empty() { 0.0 } else { 2.0 * sum - min };
+    steps / 255.0 + 1e-5
+}
+
 // ---------------------------------------------------------------------------------------
 // mlab_stream
 
-/// `mlab_stream`: M from the first byte (1, 2, 3, 4 or 8), then a stream of fragments.
+/// `mlab_stream`: M from the first byte (1, 2, 3, 4 or 8), then a stream of fragments; the
+/// stream runs in both arithmetics.
 pub fn mlab_stream(data: &[u8]) {
     let mut input = Input::new(data);
     let Some(sel) = input.u8() else { return };
+    mlab_stream_a::<Paper>(sel, input.clone());
+    mlab_stream_a::<Unbiased>(sel, input);
+}
+
+fn mlab_stream_a<A: Model>(sel: u8, mut input: Input) {
     match sel % 5 {
-        0 => mlab_stream_m::<1>(&mut input),
-        1 => mlab_stream_m::<2>(&mut input),
-        2 => mlab_stream_m::<3>(&mut input),
-        3 => mlab_stream_m::<4>(&mut input),
-        _ => mlab_stream_m::<8>(&mut input),
+        0 => mlab_stream_m::<1, A>(&mut input),
+        1 => mlab_stream_m::<2, A>(&mut input),
+        2 => mlab_stream_m::<3, A>(&mut input),
+        3 => mlab_stream_m::<4, A>(&mut input),
+        _ => mlab_stream_m::<8, A>(&mut input),
     }
 }
 
-fn mlab_stream_m<const M: usize>(input: &mut Input) {
-    let mut array = BlendingArray::<M, Paper>::new();
-    let mut reference = RefMlab::new(M);
+fn mlab_stream_m<const M: usize, A: Model>(input: &mut Input) {
+    let name = A::NAME;
+    let mut array = BlendingArray::<M, A>::new();
+    let mut reference = RefMlab::new::<A>(M);
     // Lanes: 8 pixels; lane 0 gets every fragment (it must equal `array`), the others the
     // fragments their bit of `lane_mask(n)` selects; off lanes are handed a garbage row.
     let mut span: MlabSpan<M> = [[Row::EMPTY; LANES]; M];
@@ -76,55 +140,65 @@ fn mlab_stream_m<const M: usize>(input: &mut Input) {
     let mut accepted = Vec::new();
     // Exact background visibility: the product of (1 - alpha).
     let mut visibility = 1.0f64;
+    // Quantization error of each accepted fragment, in steps.
+    let mut quant = Vec::new();
     while accepted.len() < MAX_FRAGMENTS {
         let Some(raw) = input.raw_fragment() else { break };
         raws.push(raw);
         if raws.len() == LANES {
-            check_fragment_lanes(&raws, lane_mask(accepted.len() + 7));
+            check_fragment_lanes::<A>(&raws, lane_mask(accepted.len() + 7));
             raws.clear();
         }
         let Some(f) = validate(&raw) else { continue };
+        // The reference row (equal to the kernel's quantization in `A`: checked by `validate`).
+        let row = A::ref_row(&f);
         array.insert(&f);
         let mask = lane_mask(accepted.len());
-        let rows8 = lane_rows(f.row(), mask);
-        lanes::mlab_insert_with::<Paper, _>(&mut span, &rows8, mask);
+        let rows8 = lane_rows(row, mask);
+        if is_default::<A>() && accepted.len() % 2 == 1 {
+            lanes::mlab_insert(&mut span, &rows8, mask);
+        } else {
+            lanes::mlab_insert_with::<A, _>(&mut span, &rows8, mask);
+        }
         for (lane, a) in lane_arrays.iter_mut().enumerate() {
             if mask >> lane & 1 == 1 {
-                mlab_mod::insert_with::<Paper, _>(a, rows8[lane]);
+                mlab_mod::insert_with::<A, _>(a, rows8[lane]);
             }
         }
         assert_eq!(
             lanes::to_pixel_major(&span),
             lane_arrays,
-            "M = {M}: lanes differ from scalar, mask {mask:#010b}"
+            "M = {M} {name}: lanes differ from scalar, mask {mask:#010b}"
         );
         assert_eq!(&lane_arrays[0], array.rows());
         check_mlab_resolve_lanes(&span, &lane_arrays);
-        reference.insert(f.row());
+        reference.insert(row);
         accepted.push(parts(&f));
+        quant.push(A::quant_error(f.alpha()));
         visibility *= 1.0 - f64::from(f.alpha());
         let n = accepted.len();
         let rows = array.rows();
         assert_eq!(
             rows.as_slice(),
             reference.rows().as_slice(),
-            "M = {M}: differs from reference Listing 1 after {accepted:?}"
+            "M = {M} {name}: differs from reference Listing 1 after {accepted:?}"
         );
         check_invariants(rows, &accepted);
         let filled = rows.iter().filter(|r| !r.is_empty()).count();
-        assert_eq!(filled, n.min(M), "M = {M}: {rows:?} after {n} fragments");
+        assert_eq!(filled, n.min(M), "M = {M} {name}: {rows:?} after {n} fragments");
         let r = array.resolve();
         check_resolved(r, M as f32, &accepted);
-        // Each quantization and each merge moves the product by at most 0.5 / 255.
+        // Every insert into a full array merges: `n - M` merges so far.
+        let bound = visibility_bound::<A>(&quant, n.saturating_sub(M));
         let err = (f64::from(r.transmittance) - visibility).abs();
         assert!(
-            err <= n as f64 / 255.0 + 1e-5,
-            "M = {M}: visibility {r:?} vs exact {visibility} after {accepted:?}"
+            err <= bound,
+            "M = {M} {name}: visibility {r:?} vs exact {visibility} (error {err} > {bound}) after {accepted:?}"
         );
     }
     let n = accepted.len();
     if n <= M && occluding(&accepted) {
-        check_close(array.resolve(), oracle(&accepted), n as f64 / 255.0 + 1e-5, &accepted);
+        check_close(array.resolve(), oracle(&accepted), oracle_bound(&quant), &accepted);
     }
 }
 
@@ -132,23 +206,29 @@ fn mlab_stream_m<const M: usize>(input: &mut Input) {
 // hybrid_stream
 
 /// `hybrid_stream`: K from the first byte (0, 1, 2, 4 or 8), then a stream of fragments,
-/// then the seed of a permutation.
+/// then the seed of a permutation; the stream runs in both arithmetics.
 pub fn hybrid_stream(data: &[u8]) {
     let mut input = Input::new(data);
     let Some(sel) = input.u8() else { return };
+    hybrid_stream_a::<Paper>(sel, input.clone());
+    hybrid_stream_a::<Unbiased>(sel, input);
+}
+
+fn hybrid_stream_a<A: Model>(sel: u8, mut input: Input) {
     match sel % 5 {
-        0 => hybrid_stream_k::<0>(&mut input),
-        1 => hybrid_stream_k::<1>(&mut input),
-        2 => hybrid_stream_k::<2>(&mut input),
-        3 => hybrid_stream_k::<4>(&mut input),
-        _ => hybrid_stream_k::<8>(&mut input),
+        0 => hybrid_stream_k::<0, A>(&mut input),
+        1 => hybrid_stream_k::<1, A>(&mut input),
+        2 => hybrid_stream_k::<2, A>(&mut input),
+        3 => hybrid_stream_k::<4, A>(&mut input),
+        _ => hybrid_stream_k::<8, A>(&mut input),
     }
 }
 
-fn hybrid_stream_k<const K: usize>(input: &mut Input) {
-    let mut ht = Hybrid::<K, Paper>::new();
-    let mut span = HybridSpan::<K, Paper>::new();
-    let mut lane_px = [Hybrid::<K, Paper>::new(); LANES];
+fn hybrid_stream_k<const K: usize, A: Model>(input: &mut Input) {
+    let name = A::NAME;
+    let mut ht = Hybrid::<K, A>::new();
+    let mut span = HybridSpan::<K, A>::new();
+    let mut lane_px = [Hybrid::<K, A>::new(); LANES];
     let mut frags = Vec::new();
     let mut rows = Vec::new();
     // The stream ends at a fragment tag 0xff (so the permutation seed can follow) or at the end.
@@ -158,9 +238,10 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
             break;
         }
         let Some(f) = validate(&raw) else { continue };
+        let row = A::ref_row(&f);
         ht.insert(&f);
         let mask = lane_mask(frags.len());
-        let rows8 = lane_rows(f.row(), mask);
+        let rows8 = lane_rows(row, mask);
         lanes::hybrid_insert(&mut span, &rows8, mask);
         for (lane, px) in lane_px.iter_mut().enumerate() {
             if mask >> lane & 1 == 1 {
@@ -170,28 +251,34 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
         check_hybrid_lanes(&span, &lane_px);
         assert_eq!(lane_px[0], ht);
         frags.push(f);
-        rows.push(f.row());
-        let (head, tail) = ref_hybrid(K, &rows);
+        rows.push(row);
+        let (head, tail) = ref_hybrid(K, &rows, A::TAIL);
         assert_eq!(
             ht.head().as_slice(),
             head.as_slice(),
-            "K = {K}: head differs from the reference after {rows:?}"
+            "K = {K} {name}: head differs from the reference after {rows:?}"
         );
         assert_eq!(
             ht.tail().to_bytes(),
             tail,
-            "K = {K}: tail {:?} differs from the reference after {rows:?}",
-            ht.tail()
+            "K = {K} {name}: tail {:?} differs from the reference {:?} after {rows:?}",
+            ht.tail(),
+            A::TAIL.fields(tail)
         );
         check_invariants(ht.head(), &rows);
-        check_resolved(ht.resolve(), K as f32 + tail_color_limit(), &rows);
+        check_resolved(ht.resolve(), K as f32 + tail_color_limit::<A>(), &rows);
     }
     let n = frags.len();
     let accepted: Vec<_> = frags.iter().map(parts).collect();
     if n <= K {
-        assert_eq!(ht.tail(), Tail::EMPTY, "K = {K}: tail used with {n} fragments");
+        assert_eq!(
+            ht.tail(),
+            <A::Tail as TailFormat>::EMPTY,
+            "K = {K} {name}: tail used with {n} fragments"
+        );
         if occluding(&accepted) {
-            check_close(ht.resolve(), oracle(&accepted), n as f64 / 255.0 + 1e-5, &accepted);
+            let quant: Vec<f64> = frags.iter().map(|f| A::quant_error(f.alpha())).collect();
+            check_close(ht.resolve(), oracle(&accepted), oracle_bound(&quant), &accepted);
         }
     }
     if !distinct_depths(&rows) {
@@ -208,13 +295,13 @@ fn hybrid_stream_k<const K: usize>(input: &mut Input) {
     }
     let reversed: Vec<usize> = (0..n).rev().collect();
     for order in [order, reversed] {
-        let mut other = Hybrid::<K, Paper>::new();
+        let mut other = Hybrid::<K, A>::new();
         for &i in &order {
             other.insert(&frags[i]);
         }
         assert_eq!(
             other, ht,
-            "K = {K}: HT depends on submission order {order:?} of {rows:?}"
+            "K = {K} {name}: HT depends on submission order {order:?} of {rows:?}"
         );
         let (a, b) = (other.resolve(), ht.resolve());
         assert_eq!(a.transmittance.to_bits(), b.transmittance.to_bits());
@@ -265,7 +352,7 @@ pub fn check_mlab_resolve_lanes<const M: usize>(span: &MlabSpan<M>, pixels: &[[R
 }
 
 /// A lanes HT span equals the scalar pixels byte for byte, and resolves bit for bit.
-pub fn check_hybrid_lanes<const K: usize>(span: &HybridSpan<K, Paper>, pixels: &[Hybrid<K, Paper>; LANES]) {
+pub fn check_hybrid_lanes<const K: usize, A: Arithmetic>(span: &HybridSpan<K, A>, pixels: &[Hybrid<K, A>; LANES]) {
     let r = lanes::hybrid_resolve(span);
     let bg = Background::Transparent;
     let px8 = lanes::hybrid_resolve_rgba8(span, bg);
@@ -284,10 +371,15 @@ pub fn check_hybrid_lanes<const K: usize>(span: &HybridSpan<K, Paper>, pixels: &
     }
 }
 
-/// `FragmentLanes::quantize` and `quantize_straight` on 8 raw fragments (color, alpha,
-/// depth as given, whatever constructor they were drawn for): on lanes are valid exactly
-/// where the scalar constructor accepts, with the scalar row; off lanes are neither.
-pub fn check_fragment_lanes(raws: &[crate::input::RawFragment], mask: u8) {
+/// `FragmentLanes::quantize_with::<A>` and `quantize_straight_with::<A>` on 8 raw
+/// fragments (color, alpha, depth as given, whatever constructor they were drawn for): on
+/// lanes are valid exactly where the scalar constructor accepts, with the scalar row of
+/// `A` (`A::quantize`) and the reference row; off lanes are neither. Then
+/// `mlab_insert_fragments_with::<A>` and `hybrid_insert_fragments` equal the scalar
+/// inserts of the valid rows. For the default arithmetic, the entry points without a type
+/// parameter give the same.
+pub fn check_fragment_lanes<A: Model>(raws: &[crate::input::RawFragment], mask: u8) {
+    let name = A::NAME;
     let fl = FragmentLanes {
         color: core::array::from_fn(|c| core::array::from_fn(|l| raws[l].color[c])),
         alpha: core::array::from_fn(|l| raws[l].a),
@@ -295,10 +387,18 @@ pub fn check_fragment_lanes(raws: &[crate::input::RawFragment], mask: u8) {
     };
     for straight in [false, true] {
         let q = if straight {
-            fl.quantize_straight_with::<Paper>(mask)
+            fl.quantize_straight_with::<A>(mask)
         } else {
-            fl.quantize_with::<Paper>(mask)
+            fl.quantize_with::<A>(mask)
         };
+        if is_default::<A>() {
+            let d = if straight {
+                fl.quantize_straight(mask)
+            } else {
+                fl.quantize(mask)
+            };
+            assert_eq!(d, q, "the default quantization is not {name}'s");
+        }
         assert_eq!(q.valid & q.invalid, 0);
         assert_eq!((q.valid | q.invalid) & !mask, 0, "off lanes reported: {q:?}");
         for (lane, raw) in raws.iter().enumerate() {
@@ -316,7 +416,16 @@ pub fn check_fragment_lanes(raws: &[crate::input::RawFragment], mask: u8) {
                         q.valid >> lane & 1 == 1,
                         "lane {lane}: scalar accepts {raw:?}, lanes refuse"
                     );
-                    assert_eq!(q.rows[lane], f.row(), "lane {lane}: {raw:?} straight {straight}");
+                    assert_eq!(
+                        q.rows[lane],
+                        A::quantize(&f),
+                        "lane {lane} {name}: {raw:?} straight {straight}"
+                    );
+                    assert_eq!(
+                        q.rows[lane],
+                        A::ref_row(&f),
+                        "lane {lane} {name}: {raw:?} straight {straight}, reference"
+                    );
                 }
                 (true, Err(e)) => {
                     assert!(
@@ -330,16 +439,29 @@ pub fn check_fragment_lanes(raws: &[crate::input::RawFragment], mask: u8) {
     }
     // The insert_fragments entry points: invalid lanes reported and left untouched.
     let mut span = [[Row::EMPTY; LANES]; 2];
-    let invalid = lanes::mlab_insert_fragments_with::<Paper, _>(&mut span, &fl, mask);
-    let q = fl.quantize_with::<Paper>(mask);
+    let invalid = if is_default::<A>() {
+        lanes::mlab_insert_fragments(&mut span, &fl, mask)
+    } else {
+        lanes::mlab_insert_fragments_with::<A, _>(&mut span, &fl, mask)
+    };
+    let q = fl.quantize_with::<A>(mask);
     assert_eq!(invalid, q.invalid);
     let mut expected = [[Row::EMPTY; 2]; LANES];
     for (lane, p) in expected.iter_mut().enumerate() {
         if q.valid >> lane & 1 == 1 {
-            mlab_mod::insert_with::<Paper, _>(p, q.rows[lane]);
+            mlab_mod::insert_with::<A, _>(p, q.rows[lane]);
         }
     }
     assert_eq!(lanes::to_pixel_major(&span), expected);
+    let mut hspan = HybridSpan::<1, A>::new();
+    assert_eq!(lanes::hybrid_insert_fragments(&mut hspan, &fl, mask), q.invalid);
+    let mut hexpected = [Hybrid::<1, A>::new(); LANES];
+    for (lane, p) in hexpected.iter_mut().enumerate() {
+        if q.valid >> lane & 1 == 1 {
+            p.insert_row(q.rows[lane]);
+        }
+    }
+    check_hybrid_lanes(&hspan, &hexpected);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -350,7 +472,8 @@ fn row_or(input: &mut Input, fill: Row) -> Row {
     input.array::<8>().map(Row::from_bytes).unwrap_or(fill)
 }
 
-/// Layout of any 8 bytes as a row and as a tail, checked against the documented tables.
+/// Layout of any 8 bytes as a row and as a tail of both layouts, checked against the
+/// documented tables.
 pub fn check_layout(b: [u8; 8]) {
     let w = [
         u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
@@ -366,10 +489,11 @@ pub fn check_layout(b: [u8; 8]) {
     assert_eq!(row.depth().to_bits(), w[1]);
     assert_eq!(row.is_empty(), b == [0, 0, 0, 255, 0, 0, 0x80, 0x7f]);
     assert_eq!(row.is_invisible(), b[..4] == [0, 0, 0, 255]);
-    let tail = Tail::from_bytes(b);
+    // The paper's tail: two words, spare bits 30..32 of word0.
+    let tail = PaperTail::from_bytes(b);
     assert_eq!(tail.to_bytes(), b);
     assert_eq!(tail.words(), w);
-    assert_eq!(Tail::from_words(w), tail);
+    assert_eq!(PaperTail::from_words(w), tail);
     assert_eq!(
         tail.color_sum(),
         [w[0] & 1023, (w[0] >> 10) & 1023, (w[0] >> 20) & 1023]
@@ -377,46 +501,144 @@ pub fn check_layout(b: [u8; 8]) {
     assert_eq!(tail.alpha_sum(), w[1] & 0xffff);
     assert_eq!(tail.count(), w[1] >> 16);
     assert_eq!(tail.spare(), w[0] >> 30);
+    check_tail_fields::<Paper>(b);
+    // The wide tail: one little-endian u64.
+    let v = u64::from_le_bytes(b);
+    let wide = mlab::Tail::from_bytes(b);
+    assert_eq!(wide.to_bytes(), b);
+    assert_eq!(wide.to_le_u64(), v);
+    assert_eq!(mlab::Tail::from_le_u64(v), wide);
+    assert_eq!(wide.words(), w);
+    assert_eq!(mlab::Tail::from_words(w), wide);
+    check_tail_fields::<Unbiased>(b);
 }
 
-fn tail_fields(t: Tail) -> [u64; 5] {
+/// The tail of `A` read from any 8 bytes: fields equal to the reference layout's,
+/// `saturated` exactly when a field is at its maximum, and `from_sums` saturating each
+/// field (with the spare bits 0), for the fields as read and for values past them.
+fn check_tail_fields<A: Model>(b: [u8; 8]) {
+    let layout = A::TAIL;
+    let t = <A::Tail as TailFormat>::from_bytes(b);
+    let f = layout.fields(b);
+    assert_eq!(tail_fields(t), f, "{} tail fields of {b:02x?}", A::NAME);
+    assert_eq!(t.saturated(), layout.saturated(b), "{} saturated() of {t:?}", A::NAME);
+    let sums = |f: [u64; 5]| {
+        let f = f.map(|x| u32::try_from(x).unwrap_or(u32::MAX));
+        <A::Tail as TailFormat>::from_sums([f[0], f[1], f[2]], f[3], f[4]).to_bytes()
+    };
+    assert_eq!(sums(f), layout.pack(f, [0; 8]), "{} from_sums of {f:?}", A::NAME);
+    // Past the maxima: the raw bytes as larger numbers (bits beyond the field kept).
+    let v = u64::from_le_bytes(b);
+    let big: [u64; 5] = core::array::from_fn(|i| (v >> (8 * i)) & 0xff_ffff);
+    let sat: [u64; 5] = core::array::from_fn(|i| big[i].min(layout.max(i)));
+    assert_eq!(sums(big), layout.pack(sat, [0; 8]), "{} from_sums of {big:?}", A::NAME);
+}
+
+fn tail_fields<T: TailFormat>(t: T) -> [u64; 5] {
     let [r, g, b] = t.color_sum();
     [r, g, b, t.alpha_sum(), t.count()].map(u64::from)
 }
 
+/// The merge of two arbitrary rows in both arithmetics: byte-equal to the reference
+/// merges (the default `mlab::merge` to the unbiased one), each product within
+/// `A::MERGE_ERROR` steps of the exact one (T always, colors unless they saturate at 255),
+/// and `color <= 255 - T` kept when both rows have it (documented for both arithmetics).
+pub fn check_merges(front: Row, back: Row) {
+    assert_eq!(
+        mlab_mod::merge(front, back),
+        <Unbiased as Model>::ref_merge(front, back),
+        "default merge of {front:?}, {back:?}"
+    );
+    check_merge::<Paper>(front, back);
+    check_merge::<Unbiased>(front, back);
+}
+
+fn check_merge<A: Model>(front: Row, back: Row) {
+    let name = A::NAME;
+    let m = mlab_mod::merge_with::<A>(front, back);
+    assert_eq!(m, A::ref_merge(front, back), "{name} merge of {front:?}, {back:?}");
+    let [fr, fg, fb, ft] = front.rgbt().map(f64::from);
+    let [br, bg, bb, bt] = back.rgbt().map(f64::from);
+    let [mr, mg, mb, mt] = m.rgbt().map(f64::from);
+    let within = |got: f64, exact: f64| (got - exact).abs() < A::MERGE_ERROR + 1e-9;
+    assert!(
+        within(mt, ft * bt / 255.0),
+        "{name} merge T of {front:?}, {back:?}: {m:?}"
+    );
+    for (got, (a, b)) in [mr, mg, mb].into_iter().zip([(fr, br), (fg, bg), (fb, bb)]) {
+        let exact = a + b * ft / 255.0;
+        assert!(
+            within(got, exact) || (got == 255.0 && exact > 254.0),
+            "{name} merge color of {front:?}, {back:?}: {m:?}"
+        );
+    }
+    assert_eq!(m.depth().to_bits(), front.depth().to_bits());
+    let occludes = |r: Row| r.color().iter().all(|&c| c <= 255 - r.transmittance());
+    if occludes(front) && occludes(back) {
+        assert!(
+            occludes(m),
+            "{name} merge of {front:?}, {back:?}: {m:?} has color above alpha"
+        );
+    }
+}
+
 /// `rows_from_bytes`: the first byte picks M (1, 2, 3, 4, 8) and K (0, 1, 2, 4, 8); then
 /// M rows, a row to insert, K head rows, a tail, a background (missing bytes: empty rows).
+/// The MLAB part and the HT part each run on the same bytes in both arithmetics.
 pub fn rows_from_bytes(data: &[u8]) {
     for chunk in data.chunks_exact(8) {
         check_layout(chunk.try_into().unwrap());
     }
+    for pair in data.chunks_exact(16) {
+        let (a, b) = pair.split_at(8);
+        let (a, b) = (
+            Row::from_bytes(a.try_into().unwrap()),
+            Row::from_bytes(b.try_into().unwrap()),
+        );
+        check_merges(a, b);
+        check_merges(b, a);
+    }
     let mut input = Input::new(data);
     let Some(sel) = input.u8() else { return };
+    let mut paper = input.clone();
+    garbage_mlab_a::<Paper>(sel, &mut paper);
+    garbage_mlab_a::<Unbiased>(sel, &mut input);
+    assert_eq!(
+        paper.remaining(),
+        input.remaining(),
+        "both arithmetics read the same bytes"
+    );
+    let mut paper = input.clone();
+    garbage_hybrid_a::<Paper>(sel, &mut paper);
+    garbage_hybrid_a::<Unbiased>(sel, &mut input);
+}
+
+fn garbage_mlab_a<A: Model>(sel: u8, input: &mut Input) {
     match sel % 5 {
-        0 => garbage_mlab::<1>(&mut input),
-        1 => garbage_mlab::<2>(&mut input),
-        2 => garbage_mlab::<3>(&mut input),
-        3 => garbage_mlab::<4>(&mut input),
-        _ => garbage_mlab::<8>(&mut input),
-    }
-    match sel / 5 % 5 {
-        0 => garbage_hybrid::<0>(&mut input),
-        1 => garbage_hybrid::<1>(&mut input),
-        2 => garbage_hybrid::<2>(&mut input),
-        3 => garbage_hybrid::<4>(&mut input),
-        _ => garbage_hybrid::<8>(&mut input),
+        0 => garbage_mlab::<1, A>(input),
+        1 => garbage_mlab::<2, A>(input),
+        2 => garbage_mlab::<3, A>(input),
+        3 => garbage_mlab::<4, A>(input),
+        _ => garbage_mlab::<8, A>(input),
     }
 }
 
-fn garbage_mlab<const M: usize>(input: &mut Input) {
+fn garbage_hybrid_a<A: Model>(sel: u8, input: &mut Input) {
+    match sel / 5 % 5 {
+        0 => garbage_hybrid::<0, A>(input),
+        1 => garbage_hybrid::<1, A>(input),
+        2 => garbage_hybrid::<2, A>(input),
+        3 => garbage_hybrid::<4, A>(input),
+        _ => garbage_hybrid::<8, A>(input),
+    }
+}
+
+fn garbage_mlab<const M: usize, A: Model>(input: &mut Input) {
+    let name = A::NAME;
     let rows: [Row; M] = core::array::from_fn(|_| row_or(input, Row::EMPTY));
     let new = row_or(input, Row::EMPTY);
-    let context = (&rows, new);
-    assert_eq!(
-        mlab_mod::merge(rows[0], new),
-        ref_merge(rows[0], new),
-        "merge of {context:?}"
-    );
+    let context = (name, &rows, new);
+    check_merge::<A>(rows[0], new);
 
     // Resolve of any rows: finite, in range, and Eq. 5 evaluated in f64.
     let r = resolve_rows(&rows);
@@ -427,11 +649,19 @@ fn garbage_mlab<const M: usize>(input: &mut Input) {
     // Insert of any row into any rows: Listing 1 step by step, never a panic.
     let (mut expected, pushed) = ref_bubble(&rows, new);
     let last = expected[M - 1];
-    expected[M - 1] = ref_merge(last, pushed);
+    expected[M - 1] = A::ref_merge(last, pushed);
     let mut after = rows;
-    mlab_mod::insert_with::<Paper, _>(&mut after, new);
-    // LANES: the same insert on a lanes array holding `rows`; assert_eq! with `after`.
-    assert_eq!(after.as_slice(), expected.as_slice(), "insert {new:?} into {rows:?}");
+    mlab_mod::insert_with::<A, _>(&mut after, new);
+    assert_eq!(
+        after.as_slice(),
+        expected.as_slice(),
+        "{name}: insert {new:?} into {rows:?}"
+    );
+    if is_default::<A>() {
+        let mut d = rows;
+        mlab_mod::insert(&mut d, new);
+        assert_eq!(d, after, "the default insert is not {name}'s");
+    }
     // Rows that satisfied the invariants keep them for any row that is not NaN or a
     // non-empty row at +infinity.
     let new_ok = new.is_empty() || new.depth() < f32::INFINITY;
@@ -453,44 +683,52 @@ fn garbage_mlab<const M: usize>(input: &mut Input) {
     }
     let mut span = lanes::from_pixel_major(&pixels);
     check_mlab_resolve_lanes(&span, &pixels);
-    lanes::mlab_insert_with::<Paper, _>(&mut span, &rows8, mask);
+    lanes::mlab_insert_with::<A, _>(&mut span, &rows8, mask);
     for (lane, p) in pixels.iter_mut().enumerate() {
         if mask >> lane & 1 == 1 {
-            mlab_mod::insert_with::<Paper, _>(p, rows8[lane]);
+            mlab_mod::insert_with::<A, _>(p, rows8[lane]);
         }
     }
     assert_eq!(
         lanes::to_pixel_major(&span),
         pixels,
-        "lanes insert on garbage rows {rows:?}, mask {mask:#010b}"
+        "{name}: lanes insert on garbage rows {rows:?}, mask {mask:#010b}"
     );
     check_mlab_resolve_lanes(&span, &pixels);
 }
 
-fn garbage_hybrid<const K: usize>(input: &mut Input) {
+fn garbage_hybrid<const K: usize, A: Model>(input: &mut Input) {
+    let name = A::NAME;
+    let layout = A::TAIL;
     let head: [Row; K] = core::array::from_fn(|_| row_or(input, Row::EMPTY));
-    let tail = Tail::from_bytes(input.array::<8>().unwrap_or([0; 8]));
+    let tail_bytes = input.array::<8>().unwrap_or([0; 8]);
+    let tail = <A::Tail as TailFormat>::from_bytes(tail_bytes);
     let new = row_or(input, Row::EMPTY);
-    let context = (&head, tail, new);
+    let context = (name, &head, tail, new);
 
-    // The tail alone: finite, in range, and Bavoil-Myers evaluated in f64. Precision of the
-    // f32 evaluation: `1 - mean` is rounded (2^-25 absolute) and raised to the power n, so
-    // |dT| <= n 2^-24 (+ the multiplies); the color is `S_c (1 - T) / S_a`, so its error
-    // is that of T divided by S_a.
+    // The tail alone: finite, in range, and Bavoil-Myers evaluated in f64 from the fields of
+    // the reference layout. Precision of the f32 evaluation: `1 - mean` is rounded (2^-25
+    // absolute) and raised to the power n, so |dT| <= n 2^-24 (+ the multiplies); the color
+    // is `S_c (1 - T) / S_a`, so its error is that of T divided by S_a. The same bounds for
+    // both layouts: they depend on the count n, not on the field widths.
     let t = tail.resolve();
-    check_resolved(t, tail_color_limit(), &tail);
-    let fields = tail_fields(tail);
+    let limit = tail_color_limit::<A>();
+    check_resolved(t, limit, &tail);
+    let fields = layout.fields(tail_bytes);
     let (c_ref, t_ref) = tail_f64(fields);
     let n = fields[4].max(1) as f64;
     let s_a = fields[3] as f64 / 255.0;
     let dt = 1e-5 + n * 2f64.powi(-24);
     let err = (f64::from(t.transmittance) - t_ref).abs();
-    assert!(err <= dt, "tail T: {t:?} vs {t_ref}, error {err} > {dt}, from {tail:?}");
+    assert!(
+        err <= dt,
+        "{name} tail T: {t:?} vs {t_ref}, error {err} > {dt}, from {tail:?}"
+    );
     let c = t.color.to_array();
     for i in 0..3 {
         let sum = fields[i] as f64 / 255.0;
-        // Default: the precision of today's f32 evaluation (|dT| / S_a, up to about 33% of
-        // the tail light when the mean alpha is a few ulps: finding F1b). Strict: what an
+        // Default: the precision of the printed f32 evaluation (|dT| / S_a, up to about 33%
+        // of the tail light when the mean alpha is a few ulps: finding F1b). Strict: what an
         // evaluation without cancellation gives, n 2^-23 relative.
         let bound = if fields[3] == 0 {
             1e-5
@@ -502,50 +740,53 @@ fn garbage_hybrid<const K: usize>(input: &mut Input) {
         let err = (f64::from(c[i]) - c_ref[i]).abs();
         assert!(
             err <= bound,
-            "tail color {i}: {t:?} vs {c_ref:?}, error {err} > {bound}, from {tail:?}"
+            "{name} tail color {i}: {t:?} vs {c_ref:?}, error {err} > {bound}, from {tail:?}"
         );
     }
 
     let r = hybrid::resolve(&head, tail);
-    check_resolved(r, K as f32 + tail_color_limit(), &context);
+    check_resolved(r, K as f32 + limit, &context);
     check_pixels(r, input, &context);
 
     // Listing 2 on any head and tail: the head is the bubble, the tail adds the pushed-out
     // row field by field, saturating, unless it is invisible; spare bits are kept.
     let (expected_head, pushed) = ref_bubble(&head, new);
-    let expected_tail = ref_tail_bytes(ref_tail_fields(tail_fields(tail), &[pushed]), tail.spare());
+    let expected_tail = layout.pack(ref_tail_fields(layout, fields, &[pushed]), tail_bytes);
     let (mut h, mut t) = (head, tail);
     hybrid::insert(&mut h, &mut t, new);
-    // LANES: the same insert on a lanes HT pixel; assert_eq! head and tail bytes.
     assert_eq!(
         h.as_slice(),
         expected_head.as_slice(),
-        "HT insert {new:?} into {head:?}"
+        "{name}: HT insert {new:?} into {head:?}"
     );
     assert_eq!(
         t.to_bytes(),
         expected_tail,
-        "HT tail after {new:?} into {tail:?}: {t:?}"
+        "{name}: HT tail after {new:?} into {tail:?}: {t:?}, expected {:?}",
+        layout.fields(expected_tail)
     );
+    let mut px = Hybrid::<K, A>::from_parts(head, tail);
+    px.insert_row(new);
+    assert_eq!((px.head(), px.tail()), (&h, t), "{name}: Hybrid::insert_row");
     let new_ok = new.is_empty() || new.depth() < f32::INFINITY;
     if invariants_hold(&head) && new_ok {
         check_invariants(&h, &context);
     }
-    check_resolved(hybrid::resolve(&h, t), K as f32 + tail_color_limit(), &context);
+    check_resolved(hybrid::resolve(&h, t), K as f32 + limit, &context);
 
     // Lanes on garbage: lane l holds the head rotated by l and the tail bytes rotated by l.
     let mask = input.u8().unwrap_or(0xff);
-    let mut pixels = [Hybrid::<K, Paper>::new(); LANES];
+    let mut pixels = [Hybrid::<K, A>::new(); LANES];
     for (lane, p) in pixels.iter_mut().enumerate() {
         let mut hd = head;
         if K > 0 {
             hd.rotate_left(lane % K);
         }
-        let mut tb = tail.to_bytes();
+        let mut tb = tail_bytes;
         tb.rotate_left(lane);
-        *p = Hybrid::from_parts(hd, Tail::from_bytes(tb));
+        *p = Hybrid::from_parts(hd, <A::Tail as TailFormat>::from_bytes(tb));
     }
-    let mut span = HybridSpan::<K, Paper>::new();
+    let mut span = HybridSpan::<K, A>::new();
     for (lane, p) in pixels.iter().enumerate() {
         for j in 0..K {
             span.head[j][lane] = p.head()[j];
@@ -601,6 +842,10 @@ fn check_pixels(r: Resolved, input: &mut Input, context: &dyn core::fmt::Debug) 
 pub trait Layout {
     /// Row-sized slots per pixel.
     const SLOTS: usize;
+    /// The arithmetic's name, for messages.
+    const NAME: &'static str;
+    /// The reference row of a valid fragment in the layout's arithmetic.
+    fn ref_row(f: &Fragment) -> Row;
     /// Largest resolved color.
     fn max_color() -> f32;
     /// The view type.
@@ -666,10 +911,10 @@ fn sentinel(lane: usize, j: usize) -> Row {
     Row::new([lane as u8, j as u8, 0x5a], 0x33, -(lane as f32) - 0.5)
 }
 
-/// MLAB with `M` rows per pixel.
-pub struct MlabLayout<const M: usize>;
-/// HT with `K` head rows and a tail per pixel.
-pub struct HybridLayout<const K: usize>;
+/// MLAB with `M` rows per pixel in the arithmetic `A`.
+pub struct MlabLayout<const M: usize, A>(core::marker::PhantomData<A>);
+/// HT with `K` head rows and a tail per pixel in the arithmetic `A`.
+pub struct HybridLayout<const K: usize, A>(core::marker::PhantomData<A>);
 
 /// Run one of the three resolve writers; bytes and halves are widened to f32 so that
 /// errors and untouched outputs compare the same way.
@@ -699,14 +944,18 @@ macro_rules! resolve_all_impl {
     }};
 }
 
-impl<const M: usize> Layout for MlabLayout<M> {
+impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
     const SLOTS: usize = M;
+    const NAME: &'static str = A::NAME;
+    fn ref_row(f: &Fragment) -> Row {
+        A::ref_row(f)
+    }
     fn max_color() -> f32 {
         M as f32
     }
-    type View<'a> = MlabFramebuffer<'a, M, Paper>;
+    type View<'a> = MlabFramebuffer<'a, M, A>;
     fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
-        SpanFramebuffer::<M, Paper>::rows_needed(w, h)
+        SpanFramebuffer::<M, A>::rows_needed(w, h)
     }
     fn span_insert(
         s: &mut [Row],
@@ -717,7 +966,7 @@ impl<const M: usize> Layout for MlabLayout<M> {
         rows: &[Row; LANES],
         mask: u8,
     ) -> Result<(), FramebufferError> {
-        SpanFramebuffer::<M, Paper>::new(s, w, h)
+        SpanFramebuffer::<M, A>::new(s, w, h)
             .expect("span storage")
             .insert_span(x, y, rows, mask)
     }
@@ -729,14 +978,14 @@ impl<const M: usize> Layout for MlabLayout<M> {
         out: &mut [Vec4],
         bg: Background,
     ) -> Result<(), FramebufferError> {
-        let v = SpanFramebuffer::<M, Paper>::new(s, w, h).expect("span storage");
+        let v = SpanFramebuffer::<M, A>::new(s, w, h).expect("span storage");
         resolve_all_impl!(v, which, out, bg)
     }
     fn span_clear(s: &mut [Row], w: u32, h: u32) {
-        SpanFramebuffer::<M, Paper>::new(s, w, h).expect("span storage").clear()
+        SpanFramebuffer::<M, A>::new(s, w, h).expect("span storage").clear()
     }
     fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
-        SpanFramebuffer::<M, Paper>::new(s, w, h)
+        SpanFramebuffer::<M, A>::new(s, w, h)
             .expect("span storage")
             .pixel(x, y)
             .map(|p| p.to_vec())
@@ -762,7 +1011,7 @@ impl<const M: usize> Layout for MlabLayout<M> {
     fn ref_insert(slots: &mut [Row], row: Row) {
         let (mut rows, pushed) = ref_bubble(slots, row);
         let last = rows[M - 1];
-        rows[M - 1] = ref_merge(last, pushed);
+        rows[M - 1] = A::ref_merge(last, pushed);
         slots.copy_from_slice(&rows);
     }
     fn ref_resolve(slots: &[Row]) -> Resolved {
@@ -781,7 +1030,7 @@ impl<const M: usize> Layout for MlabLayout<M> {
             }
         }
         let before = span;
-        lanes::mlab_insert_with::<Paper, _>(&mut span, &lane_rows(row, on), on);
+        lanes::mlab_insert_with::<A, _>(&mut span, &lane_rows(row, on), on);
         for lane in (0..LANES).filter(|&l| on >> l & 1 == 0) {
             for j in 0..M {
                 assert_eq!(
@@ -798,14 +1047,18 @@ impl<const M: usize> Layout for MlabLayout<M> {
     }
 }
 
-impl<const K: usize> Layout for HybridLayout<K> {
+impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
     const SLOTS: usize = K + 1;
-    fn max_color() -> f32 {
-        K as f32 + tail_color_limit()
+    const NAME: &'static str = A::NAME;
+    fn ref_row(f: &Fragment) -> Row {
+        A::ref_row(f)
     }
-    type View<'a> = HybridFramebuffer<'a, K, Paper>;
+    fn max_color() -> f32 {
+        K as f32 + tail_color_limit::<A>()
+    }
+    type View<'a> = HybridFramebuffer<'a, K, A>;
     fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
-        HybridSpanFramebuffer::<K, Paper>::rows_needed(w, h)
+        HybridSpanFramebuffer::<K, A>::rows_needed(w, h)
     }
     fn span_insert(
         s: &mut [Row],
@@ -816,7 +1069,7 @@ impl<const K: usize> Layout for HybridLayout<K> {
         rows: &[Row; LANES],
         mask: u8,
     ) -> Result<(), FramebufferError> {
-        HybridSpanFramebuffer::<K, Paper>::new(s, w, h)
+        HybridSpanFramebuffer::<K, A>::new(s, w, h)
             .expect("span storage")
             .insert_span(x, y, rows, mask)
     }
@@ -828,14 +1081,16 @@ impl<const K: usize> Layout for HybridLayout<K> {
         out: &mut [Vec4],
         bg: Background,
     ) -> Result<(), FramebufferError> {
-        let v = HybridSpanFramebuffer::<K, Paper>::new(s, w, h).expect("span storage");
+        let v = HybridSpanFramebuffer::<K, A>::new(s, w, h).expect("span storage");
         resolve_all_impl!(v, which, out, bg)
     }
     fn span_clear(s: &mut [Row], w: u32, h: u32) {
-        HybridSpanFramebuffer::<K, Paper>::new(s, w, h).expect("span storage").clear()
+        HybridSpanFramebuffer::<K, A>::new(s, w, h)
+            .expect("span storage")
+            .clear()
     }
     fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
-        let (head, tail) = HybridSpanFramebuffer::<K, Paper>::new(s, w, h)
+        let (head, tail) = HybridSpanFramebuffer::<K, A>::new(s, w, h)
             .expect("span storage")
             .pixel(x, y)?;
         let mut v = head.to_vec();
@@ -861,14 +1116,14 @@ impl<const K: usize> Layout for HybridLayout<K> {
         v.as_bytes()
     }
     fn ref_insert(slots: &mut [Row], row: Row) {
-        let tail = Tail::from_bytes(slots[K].to_bytes());
+        let tail = slots[K].to_bytes();
         let (head, pushed) = ref_bubble(&slots[..K], row);
         slots[..K].copy_from_slice(&head);
-        let t = ref_tail_bytes(ref_tail_fields(tail_fields(tail), &[pushed]), tail.spare());
+        let t = A::TAIL.pack(ref_tail_fields(A::TAIL, A::TAIL.fields(tail), &[pushed]), tail);
         slots[K] = Row::from_bytes(t);
     }
     fn ref_resolve(slots: &[Row]) -> Resolved {
-        hybrid::resolve(&slots[..K], Tail::from_bytes(slots[K].to_bytes()))
+        hybrid::resolve(&slots[..K], <A::Tail as TailFormat>::from_bytes(slots[K].to_bytes()))
     }
     fn cleared(slots: &mut [Row]) {
         slots[..K].fill(Row::EMPTY);
@@ -877,15 +1132,15 @@ impl<const K: usize> Layout for HybridLayout<K> {
     fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8) {
         let on = mask & inside(w, h, x0, y);
         let base = |lane: usize| (y as usize * w as usize + x0 as usize + lane) * (K + 1);
-        let mut span = HybridSpan::<K, Paper> {
+        let mut span = HybridSpan::<K, A> {
             head: core::array::from_fn(|j| core::array::from_fn(|lane| sentinel(lane, j))),
-            tails: core::array::from_fn(|lane| Tail::from_bytes(sentinel(lane, K).to_bytes())),
+            tails: core::array::from_fn(|lane| <A::Tail as TailFormat>::from_bytes(sentinel(lane, K).to_bytes())),
         };
         for lane in (0..LANES).filter(|&l| inside(w, h, x0, y) >> l & 1 == 1) {
             for (j, layer) in span.head.iter_mut().enumerate() {
                 layer[lane] = storage[base(lane) + j];
             }
-            span.tails[lane] = Tail::from_bytes(storage[base(lane) + K].to_bytes());
+            span.tails[lane] = <A::Tail as TailFormat>::from_bytes(storage[base(lane) + K].to_bytes());
         }
         let before = span;
         lanes::hybrid_insert(&mut span, &lane_rows(row, on), on);
@@ -925,16 +1180,23 @@ const GUARD_ROW: Row = Row::new([0xde, 0xad, 0xbe], 0xef, -1234.5);
 /// off). Pixels that are off, or outside the buffer, never change (in the storage and in
 /// the lanes span); guard rows never change; an error changes nothing; the lanes storage
 /// equals the scalar storage byte for byte.
+///
+/// Every input runs in both arithmetics (the same operations on the same contents).
 pub fn lanes_masks(data: &[u8]) {
     let mut input = Input::new(data);
     let Some(sel) = input.u8() else { return };
+    lanes_masks_a::<Paper>(sel, input.clone());
+    lanes_masks_a::<Unbiased>(sel, input);
+}
+
+fn lanes_masks_a<A: Model>(sel: u8, mut input: Input) {
     match sel % 6 {
-        0 => spans::<MlabLayout<1>>(&mut input),
-        1 => spans::<MlabLayout<2>>(&mut input),
-        2 => spans::<MlabLayout<4>>(&mut input),
-        3 => spans::<HybridLayout<0>>(&mut input),
-        4 => spans::<HybridLayout<1>>(&mut input),
-        _ => spans::<HybridLayout<3>>(&mut input),
+        0 => spans::<MlabLayout<1, A>>(&mut input),
+        1 => spans::<MlabLayout<2, A>>(&mut input),
+        2 => spans::<MlabLayout<4, A>>(&mut input),
+        3 => spans::<HybridLayout<0, A>>(&mut input),
+        4 => spans::<HybridLayout<1, A>>(&mut input),
+        _ => spans::<HybridLayout<3, A>>(&mut input),
     }
 }
 
@@ -1039,11 +1301,19 @@ fn spans<L: Layout>(input: &mut Input) {
                 // The lanes kernel on a copy: lanes 0 .. n of the mask, at the same place.
                 let span_mask = (mask as u16 & ((1u16 << n) - 1)) as u8;
                 let mut lanes_buf = before.clone();
-                L::lanes_span(&mut lanes_buf[GUARD..GUARD + len], w, h, x0, y, f.row(), span_mask);
+                L::lanes_span(
+                    &mut lanes_buf[GUARD..GUARD + len],
+                    w,
+                    h,
+                    x0,
+                    y,
+                    L::ref_row(&f),
+                    span_mask,
+                );
                 lanes_result = Some(lanes_buf);
                 // The span framebuffer: refused (and unchanged) if an on lane is outside, then
                 // the same span with those lanes off.
-                let rows8 = lane_rows(f.row(), span_mask);
+                let rows8 = lane_rows(L::ref_row(&f), span_mask);
                 let top = (0..LANES as u32).filter(|&l| span_mask >> l & 1 == 1).max();
                 let expected_err = if y >= h {
                     Some(FramebufferError::OutOfBounds {
@@ -1082,7 +1352,7 @@ fn spans<L: Layout>(input: &mut Input) {
                     if x < w && y < h {
                         assert_eq!(got, Ok(()));
                         let p = pixel(x, y);
-                        L::ref_insert(&mut expected[p..p + L::SLOTS], f.row());
+                        L::ref_insert(&mut expected[p..p + L::SLOTS], L::ref_row(&f));
                     } else {
                         assert_eq!(
                             got,
