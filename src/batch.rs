@@ -6,12 +6,13 @@
 //! [`SpanBatcher`] does, over any [`Framebuffer`]:
 //!
 //! ```text
-//! insert(x, y, row):                        // slot: a direct-mapped table of 256 spans
+//! insert(x, y, fragment):                   // slot: a direct-mapped table of 256 spans
 //!   s = slot of span (x / 8, y)             //   (x / 8) % 8 + 8 * (y % 32): a 64x32-pixel window
 //!   if s holds another span, or lane x % 8 is already pending in s: flush s
-//!   s.rows[x % 8] = row; s.mask |= 1 << (x % 8)
+//!   s.fragments[x % 8] = fragment (f32); s.mask |= 1 << (x % 8)
 //!   if s.mask == 0xff: flush s              // a full span goes at once
-//! flush s: framebuffer.insert_span(8 * (x / 8), y, s.rows, s.mask); s.mask = 0
+//! flush s: rows = quantize the 8 lanes at once (FragmentLanes::quantize_with)
+//!          framebuffer.insert_span(8 * (x / 8), y, rows, s.mask); s.mask = 0
 //! ```
 //!
 //! Every pixel keeps its submission order exactly: a pixel has one slot, a slot holds at
@@ -24,7 +25,7 @@
 //!
 //! Coordinates are checked when a fragment is pushed, so flushes cannot fail.
 //!
-//! The window: 64 x 32 pixels (256 spans, about 18 KiB). On the mesh of `benches/batch.rs`
+//! The window: 64 x 32 pixels (256 spans, about 43 KiB). On the mesh of `benches/batch.rs`
 //! (the tori of `examples/rasterizer.rs` at 320 x 240, 10 pixels per triangle) it gives
 //! 5.8 fragments per span insert; 64 x 8 pixels gave 4.0, 128 x 16 gave 4.5, 64 x 64 gave
 //! 6.4 for twice the memory. On the coherent stream (rectangles) every window gives 6.1-6.2.
@@ -49,10 +50,9 @@
 //! # Ok::<(), mlab::Error>(())
 //! ```
 
-use crate::arith::Arithmetic;
 use crate::fragment::Fragment;
 use crate::framebuffer::{Framebuffer, FramebufferError};
-use crate::lanes::LANES;
+use crate::lanes::{FragmentLanes, LANES};
 use crate::row::Row;
 
 /// log2 of the spans per line of the batcher's window.
@@ -62,9 +62,22 @@ const LINE_BITS: u32 = 5;
 /// Pending spans a [`SpanBatcher`] holds: a window of `8 << COL_BITS` x `1 << LINE_BITS` pixels.
 pub const BATCH_SLOTS: usize = 1 << (COL_BITS + LINE_BITS);
 
+/// One pending span: the fragments of its lanes as f32 (structure of arrays, quantized 8 at
+/// a time when the span is flushed), which lanes are pending, and which of those hold an
+/// already quantized row (its two words in the bits of `color[0]` and `color[1]`).
+#[derive(Clone, Copy, Debug)]
+struct Slot {
+    fragments: FragmentLanes,
+    mask: u8,
+    rows: u8,
+}
+
 /// Gathers fragments pushed one pixel at a time into 8-pixel span inserts on a
-/// [`Framebuffer`] (see the [module docs](self)). A fixed-size value (about 18 KiB: keep it in a `Box` or a long-lived struct rather than re-creating it per primitive), no
-/// allocation; one per thread or band.
+/// [`Framebuffer`] (see the [module docs](self)). A fixed-size value (about 43 KiB: build
+/// it once per frame and band, not per primitive), no allocation. Fragments are kept as
+/// f32 until their span is flushed, then validated and quantized 8 at a time
+/// ([`FragmentLanes::quantize_with`], byte-identical to
+/// [`Arithmetic::quantize`](crate::Arithmetic::quantize) per fragment).
 #[derive(Debug)]
 pub struct SpanBatcher<'f, F: Framebuffer> {
     fb: &'f mut F,
@@ -72,8 +85,7 @@ pub struct SpanBatcher<'f, F: Framebuffer> {
     height: u32,
     /// `y << 32 | x / 8` of the span pending in each slot (meaningful when its mask is not 0).
     keys: [u64; BATCH_SLOTS],
-    masks: [u8; BATCH_SLOTS],
-    rows: [[Row; LANES]; BATCH_SLOTS],
+    slots: [Slot; BATCH_SLOTS],
 }
 
 impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
@@ -84,21 +96,35 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
             height: fb.height(),
             fb,
             keys: [0; BATCH_SLOTS],
-            masks: [0; BATCH_SLOTS],
-            rows: [[Row::EMPTY; LANES]; BATCH_SLOTS],
+            slots: [Slot {
+                fragments: FragmentLanes::TRANSPARENT,
+                mask: 0,
+                rows: 0,
+            }; BATCH_SLOTS],
         }
     }
 
-    /// Push a fragment for pixel `(x, y)`, quantized by the framebuffer's arithmetic.
-    /// [`FramebufferError::OutOfBounds`] (and nothing pushed) if the pixel is outside.
+    /// Push a fragment for pixel `(x, y)`, quantized (when its span is flushed) by the
+    /// framebuffer's arithmetic. [`FramebufferError::OutOfBounds`] (and nothing pushed) if
+    /// the pixel is outside.
     #[inline]
     pub fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
-        self.insert_row(x, y, <F::Arith as Arithmetic>::quantize(fragment))
+        let c = fragment.color();
+        self.push(x, y, [c.x, c.y, c.z, fragment.alpha()], fragment.depth(), false)
     }
 
     /// Push a quantized row for pixel `(x, y)`.
     #[inline]
     pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        // The row's words travel as the bits of two f32 lanes (moved, never computed with:
+        // bit-exact on every target the lanes support, which `tests/batch.rs` checks with
+        // arbitrary bytes, NaN patterns included).
+        let [w0, w1] = row.words();
+        self.push(x, y, [f32::from_bits(w0), f32::from_bits(w1), 0.0, 0.0], 0.0, true)
+    }
+
+    #[inline(always)]
+    fn push(&mut self, x: u32, y: u32, rgba: [f32; 4], depth: f32, is_row: bool) -> Result<(), FramebufferError> {
         if x >= self.width || y >= self.height {
             return Err(FramebufferError::OutOfBounds {
                 x,
@@ -111,33 +137,57 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         let lane = x as usize % LANES;
         let bit = 1u8 << lane;
         let key = (y as u64) << 32 | sx as u64;
-        // In 0..64 by construction: the indexing below cannot fail.
+        // In 0..BATCH_SLOTS by construction: the indexing below cannot fail.
         let s = ((sx & ((1 << COL_BITS) - 1)) | (y & ((1 << LINE_BITS) - 1)) << COL_BITS) as usize;
-        let mut mask = self.masks[s];
+        let mask = self.slots[s].mask;
         if mask != 0 && (self.keys[s] != key || mask & bit != 0) {
             let k = self.keys[s];
-            self.fb
-                .insert_span((k as u32) * LANES as u32, (k >> 32) as u32, &self.rows[s], mask)?;
-            mask = 0;
+            Self::flush_slot(self.fb, k, &mut self.slots[s])?;
         }
         self.keys[s] = key;
-        self.rows[s][lane] = row;
-        mask |= bit;
-        if mask == 0xff {
-            self.fb.insert_span(sx * LANES as u32, y, &self.rows[s], 0xff)?;
-            mask = 0;
+        let slot = &mut self.slots[s];
+        let f = &mut slot.fragments;
+        f.color[0][lane] = rgba[0];
+        f.color[1][lane] = rgba[1];
+        f.color[2][lane] = rgba[2];
+        f.alpha[lane] = rgba[3];
+        f.depth[lane] = depth;
+        slot.mask |= bit;
+        if is_row {
+            slot.rows |= bit;
         }
-        self.masks[s] = mask;
+        if slot.mask == 0xff {
+            Self::flush_slot(self.fb, key, slot)?;
+        }
         Ok(())
+    }
+
+    /// Quantize and insert one pending span, and mark it empty.
+    #[inline]
+    fn flush_slot(fb: &mut F, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
+        let (x, y) = ((key as u32) * LANES as u32, (key >> 32) as u32);
+        let fragments = slot.mask & !slot.rows;
+        let mut q = slot.fragments.quantize_with::<F::Arith>(fragments);
+        if slot.rows != 0 {
+            for lane in 0..LANES {
+                if slot.rows & (1 << lane) != 0 {
+                    let bits = |c: usize| slot.fragments.color[c][lane].to_bits();
+                    q.rows[lane] = Row::from_words([bits(0), bits(1)]);
+                }
+            }
+        }
+        // Every pushed fragment was a validated `Fragment`: none is invalid.
+        let mask = q.valid | slot.rows;
+        slot.mask = 0;
+        slot.rows = 0;
+        fb.insert_span(x, y, &q.rows, mask)
     }
 
     /// Insert every pending span into the framebuffer.
     pub fn flush(&mut self) -> Result<(), FramebufferError> {
-        for ((mask, key), rows) in self.masks.iter_mut().zip(&self.keys).zip(&self.rows) {
-            if *mask != 0 {
-                let m = core::mem::take(mask);
-                self.fb
-                    .insert_span((*key as u32) * LANES as u32, (*key >> 32) as u32, rows, m)?;
+        for (slot, key) in self.slots.iter_mut().zip(&self.keys) {
+            if slot.mask != 0 {
+                Self::flush_slot(self.fb, *key, slot)?;
             }
         }
         Ok(())
@@ -145,7 +195,7 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
 
     /// Fragments pushed but not yet in the framebuffer.
     pub fn pending(&self) -> usize {
-        self.masks.iter().map(|m| m.count_ones() as usize).sum()
+        self.slots.iter().map(|s| s.mask.count_ones() as usize).sum()
     }
 
     /// Flush, and end the batch (also done on drop, where an error cannot be reported; none

@@ -167,6 +167,7 @@ impl Dims {
 
     /// Check a span operation at `(x, y)` with `mask`: every lane that is on lies inside.
     /// Returns the pixel index of lane 0 (which may itself be off and outside).
+    #[inline(always)]
     pub(crate) fn check_span(self, x: u32, y: u32, mask: u8) -> Result<usize, FramebufferError> {
         if y >= self.height {
             return Err(self.out_of_bounds(x, y));
