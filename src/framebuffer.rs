@@ -525,6 +525,22 @@ impl<'a, const M: usize, A: Arithmetic> MlabFramebuffer<'a, M, A> {
         self.pixels.get_mut(i).ok_or(d.out_of_bounds(x, y))
     }
 
+    /// The 8 pixels from `(x, y)` as a layer-major span (pixels past the edge empty): a
+    /// whole-array transpose when all 8 are inside (the common case).
+    #[inline(always)]
+    fn span_rows(&self, x: u32, y: u32) -> [[Row; LANES]; M] {
+        let first = y as usize * self.dims.width as usize + x as usize;
+        let valid = lanes_inside(self.dims.width, x);
+        match self
+            .pixels
+            .get(first..first + LANES)
+            .map(<&[[Row; M]; LANES]>::try_from)
+        {
+            Some(Ok(px)) if valid == LANES => lanes::from_pixel_major(px),
+            _ => gather::<M>(self.flat(), M, 0, first, valid, Row::EMPTY),
+        }
+    }
+
     fn flat(&self) -> &[Row] {
         bytemuck::cast_slice(self.pixels)
     }
@@ -587,9 +603,7 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for MlabFramebuffer<'a, M, A
         let x = span
             .checked_mul(LANES as u32)
             .filter(|&x| x < self.dims.width && y < self.dims.height)?;
-        let first = y as usize * self.dims.width as usize + x as usize;
-        let s = gather::<M>(self.flat(), M, 0, first, lanes_inside(self.dims.width, x), Row::EMPTY);
-        Some(lanes::mlab_resolve(&s))
+        Some(lanes::mlab_resolve(&self.span_rows(x, y)))
     }
 
     #[inline]
@@ -600,9 +614,7 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for MlabFramebuffer<'a, M, A
         else {
             return [to_rgba8(Resolved::CLEAR.pixel(background)); LANES];
         };
-        let first = y as usize * self.dims.width as usize + x as usize;
-        let s = gather::<M>(self.flat(), M, 0, first, lanes_inside(self.dims.width, x), Row::EMPTY);
-        lanes::mlab_resolve_rgba8(&s, background)
+        lanes::mlab_resolve_rgba8(&self.span_rows(x, y), background)
     }
 
     fn as_rows(&self) -> &[Row] {
