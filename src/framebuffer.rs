@@ -705,9 +705,20 @@ impl<'a, const K: usize, A: Arithmetic> HybridFramebuffer<'a, K, A> {
     /// Head layers and tails of the 8 pixels from pixel index `first` (`valid` inside).
     #[inline(always)]
     fn gather_span(&self, first: usize, valid: usize) -> ([[Row; LANES]; K], [A::Tail; LANES]) {
-        let head = gather::<K>(self.rows, K + 1, 0, first, valid, Row::EMPTY);
         let empty = Row::from_bytes(A::Tail::EMPTY.to_bytes());
-        let [tails] = gather::<1>(self.rows, K + 1, K, first, valid, empty);
+        let mut head = [[Row::EMPTY; LANES]; K];
+        let mut tails = [empty; LANES];
+        // One pass over the pixels' slots (contiguous): head rows, then the tail slot.
+        if let Some(px) = self.rows.get(first * (K + 1)..(first + valid.min(LANES)) * (K + 1)) {
+            for (lane, p) in px.chunks_exact(K + 1).enumerate() {
+                if let (Some((t, h)), Some(tail)) = (p.split_last(), tails.get_mut(lane)) {
+                    for (layer, row) in head.iter_mut().zip(h) {
+                        layer[lane] = *row;
+                    }
+                    *tail = *t;
+                }
+            }
+        }
         (head, bytemuck::cast(tails))
     }
 
