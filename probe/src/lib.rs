@@ -3,7 +3,7 @@
 #![no_std]
 
 use mlab::glam::Vec3;
-use mlab::{Background, BlendingArray, Fragment, Hybrid, MlabFramebuffer, Row};
+use mlab::{Background, BlendingArray, Fragment, Framebuffer, Hybrid, MlabFramebuffer, Row};
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
