@@ -11,7 +11,7 @@
 //! |---|---|---|
 //! | one pixel, or your own storage per pixel (a shader port, a ray tracer) | [`BlendingArray`], [`Hybrid`] | [pixel](#a-pixel) |
 //! | fragments arrive one pixel at a time, in any order, read back per pixel | [`MlabFramebuffer`], [`HybridFramebuffer`] ([`Framebuffer`]) | [framebuffer](#a-framebuffer) |
-//! | a rasterizer that emits one pixel at a time (scanline, tile, `euc`-like) | [`SpanBatcher`] over a [`SpanFramebuffer`] | [batcher](#a-rasterizer-one-pixel-at-a-time) |
+//! | a rasterizer that emits one pixel at a time (scanline, tile, `euc`-like) | [`SpanBatcher`] over a [`SpanFramebuffer`] (MLAB; for HT, per-pixel inserts are as fast today) | [batcher](#a-rasterizer-one-pixel-at-a-time) |
 //! | a rasterizer that shades 8 pixels of a line at once | [`SpanFramebuffer`], [`HybridSpanFramebuffer`] span inserts | [spans](#a-rasterizer-8-pixels-at-a-time) |
 //! | quality chosen at run time (a settings menu) | [`DynFramebuffer`] with [`Layers`] | [run time](#quality-at-run-time) |
 //! | your own span storage, your own loops | [`lanes`]: `mlab_insert_with`, `hybrid_insert_parts`, resolves | [`lanes`] |
