@@ -1,8 +1,14 @@
-//! `oit-lab bench`: frame-level timings of [`crate::frame`] with warm-up, repetitions,
-//! median and spread, thread scaling, and the scaling plot (SVG).
+//! `oit-lab bench`: frame-level timings of [`crate::tiled`] with warm-up, repetitions,
+//! median and spread, thread scaling, peak resident memory, the kernel-only replay bound,
+//! the tables and the scaling plot (SVG).
+//!
+//! Each configuration (scene, method, threads) runs in a child process (`oit-lab bench
+//! --one ...`, [`measure`]) so that its peak resident memory (`VmHWM` of
+//! `/proc/self/status`) is its own: the child builds the primitives, renders warm-up and
+//! timed frames, and prints one [`Measure`] line that the parent parses.
 
-use crate::frame::{Compositor, FrameMethod};
-use crate::stream::Stream;
+use crate::scenes::Scene;
+use crate::tiled::{PrimBins, TiledMethod, TiledRenderer, raster_only, replay_mlab4, storage_bytes};
 use std::time::Instant;
 
 /// What to measure.
@@ -16,6 +22,10 @@ pub struct Plan {
     pub threads: Vec<usize>,
     /// Lines per band.
     pub band_lines: u32,
+    /// Frame size.
+    pub size: (u32, u32),
+    /// Scene seed.
+    pub seed: u64,
 }
 
 /// Median and spread of repeated timings, in seconds.
@@ -30,6 +40,9 @@ pub struct Timing {
     /// CPU time of the process over wall time of the timed runs (Linux; NaN elsewhere): about
     /// the thread count when the machine was ours, less when other work shared the cores.
     pub cpu_per_wall: f64,
+    /// Median CPU seconds per run, all threads of the process (Linux `schedstat`, ns
+    /// resolution; NaN elsewhere): what the work cost when other work shared the cores.
+    pub cpu: f64,
 }
 
 impl Timing {
@@ -46,6 +59,7 @@ impl Timing {
         };
         Timing {
             cpu_per_wall: f64::NAN,
+            cpu: f64::NAN,
             median,
             min: samples.first().copied().unwrap_or(f64::NAN),
             max: samples.last().copied().unwrap_or(f64::NAN),
@@ -64,18 +78,40 @@ pub fn time<F: FnMut() -> Result<(), String>>(warmup: usize, reps: usize, mut f:
         f()?;
     }
     let mut samples = Vec::with_capacity(reps);
-    let cpu0 = process_cpu_seconds();
+    let mut cpus = Vec::with_capacity(reps);
     for _ in 0..reps.max(1) {
+        let c = threads_cpu_seconds();
         let t = Instant::now();
         f()?;
         samples.push(t.elapsed().as_secs_f64());
+        cpus.push(threads_cpu_seconds() - c);
     }
     let wall: f64 = samples.iter().sum();
-    let cpu = process_cpu_seconds() - cpu0;
+    let cpu: f64 = cpus.iter().sum();
     Ok(Timing {
         cpu_per_wall: cpu / wall,
+        cpu: Timing::of(cpus).median,
         ..Timing::of(samples)
     })
+}
+
+/// CPU seconds run by all threads of this process so far: the sum of the first field of
+/// `/proc/self/task/*/schedstat` (nanoseconds); NaN where unavailable.
+pub fn threads_cpu_seconds() -> f64 {
+    let Ok(dir) = std::fs::read_dir("/proc/self/task") else {
+        return f64::NAN;
+    };
+    let mut ns = 0u64;
+    for e in dir.flatten() {
+        let Ok(s) = std::fs::read_to_string(e.path().join("schedstat")) else {
+            return f64::NAN;
+        };
+        match s.split_whitespace().next().and_then(|v| v.parse::<u64>().ok()) {
+            Some(v) => ns += v,
+            None => return f64::NAN,
+        }
+    }
+    ns as f64 * 1e-9
 }
 
 /// User + system CPU seconds of this process (`/proc/self/stat`, 100 ticks per second),
@@ -107,80 +143,429 @@ pub fn pool(threads: usize) -> Result<rayon::ThreadPool, String> {
         .map_err(|e| e.to_string())
 }
 
-/// One measurement.
-#[derive(Clone, Debug)]
+/// What one configuration times.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum What {
+    /// A whole frame with a method of the tiled renderer.
+    Frame(TiledMethod),
+    /// The kernel-only replay of MLAB 4's span inserts ([`replay_mlab4`], one thread).
+    Replay,
+    /// The rasterizer alone ([`raster_only`], one thread).
+    Raster,
+    /// Nothing but the primitives: the process's own footprint.
+    Idle,
+}
+
+impl What {
+    /// Short name for the command line.
+    pub fn key(self) -> &'static str {
+        match self {
+            What::Frame(m) => m.key(),
+            What::Replay => "replay",
+            What::Raster => "raster",
+            What::Idle => "idle",
+        }
+    }
+
+    /// Display name.
+    pub fn name(self) -> &'static str {
+        match self {
+            What::Frame(m) => m.name(),
+            What::Replay => "MLAB 4 kernel-only replay",
+            What::Raster => "rasterizer alone",
+            What::Idle => "process + primitives only",
+        }
+    }
+
+    /// From a short name.
+    pub fn from_key(s: &str) -> Option<What> {
+        match s {
+            "replay" => Some(What::Replay),
+            "raster" => Some(What::Raster),
+            "idle" => Some(What::Idle),
+            _ => TiledMethod::from_key(s).map(What::Frame),
+        }
+    }
+}
+
+/// One measured configuration.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Measure {
-    /// Scene name.
-    pub scene: String,
-    /// Method or phase name.
-    pub what: String,
+    /// Scene.
+    pub scene: Scene,
+    /// What was timed.
+    pub what: What,
     /// Threads.
     pub threads: usize,
+    /// Lines per band.
+    pub band_lines: u32,
+    /// Pixels in the frame.
+    pub pixels: usize,
     /// Fragments in the frame.
-    pub fragments: usize,
+    pub fragments: u64,
     /// The timing.
     pub timing: Timing,
+    /// Peak resident memory of the process that measured (`VmHWM`), bytes.
+    pub peak_rss: u64,
+    /// Bytes of the targets and bins held by the renderer (as allocated).
+    pub held: u64,
+    /// Bytes of the primitive list.
+    pub prims: u64,
+    /// The most fragments one band of the A-buffer held (0 for other methods).
+    pub band_fragments: u64,
 }
 
 impl Measure {
-    /// Nanoseconds per fragment (median).
+    /// Nanoseconds per fragment (median wall time).
     pub fn ns_per_fragment(&self) -> f64 {
         self.timing.median * 1e9 / self.fragments.max(1) as f64
     }
-}
 
-/// Every frame method at every thread count, plus (one thread) MLAB's binning alone and
-/// MLAB without bins (whole frame, stream order).
-pub fn run(scene: &str, stream: &Stream, plan: &Plan, mut log: impl FnMut(&Measure)) -> Result<Vec<Measure>, String> {
-    let mut out = vec![[0u8; 4]; stream.pixels()];
-    let mut results = Vec::new();
-    let mut push = |what: &str, threads: usize, timing: Timing, results: &mut Vec<Measure>| {
-        let m = Measure {
-            scene: scene.into(),
-            what: what.into(),
-            threads,
-            fragments: stream.frags.len(),
-            timing,
-        };
-        log(&m);
-        results.push(m);
-    };
-    for &t in &plan.threads {
-        let pool = pool(t)?;
-        let mut c = Compositor::new(plan.band_lines);
-        for m in FrameMethod::ALL {
-            let timing = pool.install(|| time(plan.warmup, plan.reps, || c.render(m, stream, &mut out)))?;
-            push(m.name(), t, timing, &mut results);
-        }
-        if t == 1 {
-            let timing = pool.install(|| time(plan.warmup, plan.reps, || c.bin_rows(stream)))?;
-            push("MLAB 4: binning alone", t, timing, &mut results);
-            let mut storage = Vec::new();
-            let timing = time(plan.warmup, plan.reps, || {
-                crate::frame::mlab_unbinned::<4>(stream, &mut storage, &mut out)
-            })?;
-            push("MLAB 4 lanes, no bins", t, timing, &mut results);
-        }
+    /// CPU nanoseconds per fragment (median CPU time, all threads).
+    pub fn cpu_ns_per_fragment(&self) -> f64 {
+        self.timing.cpu * 1e9 / self.fragments.max(1) as f64
     }
-    Ok(results)
+
+    /// Framebuffer or target + output + primitive bins + primitives: what the frame path
+    /// needs (bytes).
+    pub fn accounted(&self) -> u64 {
+        self.held + 4 * self.pixels as u64 + self.prims
+    }
+
+    /// The child's output line.
+    pub fn to_line(&self) -> String {
+        let t = &self.timing;
+        format!(
+            "MEASURE {} {} {} {} {} {} {:e} {:e} {:e} {:e} {:e} {} {} {} {}",
+            self.scene.name(),
+            self.what.key(),
+            self.threads,
+            self.band_lines,
+            self.pixels,
+            self.fragments,
+            t.median,
+            t.min,
+            t.max,
+            t.cpu_per_wall,
+            t.cpu,
+            self.peak_rss,
+            self.held,
+            self.prims,
+            self.band_fragments
+        )
+    }
+
+    /// Parse a [`to_line`](Self::to_line) line.
+    pub fn from_line(line: &str) -> Option<Measure> {
+        let f: Vec<&str> = line.strip_prefix("MEASURE ")?.split_whitespace().collect();
+        if f.len() != 15 {
+            return None;
+        }
+        let num = |i: usize| f[i].parse::<f64>().ok();
+        let int = |i: usize| f[i].parse::<u64>().ok();
+        Some(Measure {
+            scene: Scene::from_name(f[0])?,
+            what: What::from_key(f[1])?,
+            threads: int(2)? as usize,
+            band_lines: int(3)? as u32,
+            pixels: int(4)? as usize,
+            fragments: int(5)?,
+            timing: Timing {
+                median: num(6)?,
+                min: num(7)?,
+                max: num(8)?,
+                cpu_per_wall: num(9)?,
+                cpu: num(10)?,
+            },
+            peak_rss: int(11)?,
+            held: int(12)?,
+            prims: int(13)?,
+            band_fragments: int(14)?,
+        })
+    }
 }
 
-/// MLAB 4 at every band height in `lines`, `threads` threads.
-pub fn bands(stream: &Stream, plan: &Plan, lines: &[u32], threads: usize) -> Result<Vec<(u32, Timing)>, String> {
-    let pool = pool(threads)?;
-    let mut out = vec![[0u8; 4]; stream.pixels()];
-    lines
-        .iter()
-        .map(|&l| {
-            let mut c = Compositor::new(l);
-            let t = pool.install(|| {
+/// Peak resident memory of this process (`VmHWM` in `/proc/self/status`), bytes; 0 where
+/// unavailable.
+pub fn peak_rss() -> u64 {
+    let Ok(s) = std::fs::read_to_string("/proc/self/status") else {
+        return 0;
+    };
+    s.lines()
+        .find_map(|l| l.strip_prefix("VmHWM:"))
+        .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        .map_or(0, |kb| kb * 1024)
+}
+
+/// Measure one configuration in this process (the child's work).
+pub fn measure(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<Measure, String> {
+    let (w, h) = plan.size;
+    let prims = scene.primitives(w, h, plan.seed);
+    let mut out = vec![[0u8; 4]; w as usize * h as usize];
+    let mut m = Measure {
+        scene,
+        what,
+        threads,
+        band_lines: plan.band_lines,
+        pixels: out.len(),
+        fragments: 0,
+        timing: Timing::of(vec![0.0]),
+        peak_rss: 0,
+        held: 0,
+        prims: prims.bytes() as u64,
+        band_fragments: 0,
+    };
+    match what {
+        What::Frame(method) => {
+            let pool = pool(threads)?;
+            let mut r = TiledRenderer::new(plan.band_lines);
+            let mut n = 0;
+            m.timing = pool.install(|| {
                 time(plan.warmup, plan.reps, || {
-                    c.render(FrameMethod::Mlab4, stream, &mut out)
+                    n = r.render(method, &prims, &mut out)?;
+                    Ok(())
                 })
             })?;
-            Ok((l, t))
-        })
-        .collect()
+            m.fragments = n;
+            m.held = r.held_bytes() as u64;
+            m.band_fragments = r.abuffer_peak_fragments() as u64;
+        }
+        What::Replay => {
+            let (sums, cpu, n) = replay_mlab4(&prims, plan.band_lines, plan.warmup, plan.reps, threads_cpu_seconds)?;
+            let wall: f64 = sums.iter().sum::<f64>() / sums.len().max(1) as f64;
+            m.timing = Timing {
+                cpu_per_wall: cpu / wall,
+                cpu,
+                ..Timing::of(sums)
+            };
+            m.fragments = n;
+        }
+        What::Raster => {
+            let mut bins = PrimBins::default();
+            let mut n = 0;
+            m.timing = time(plan.warmup, plan.reps, || {
+                n = raster_only(&prims, &mut bins, plan.band_lines);
+                Ok(())
+            })?;
+            m.fragments = n;
+        }
+        What::Idle => {}
+    }
+    m.peak_rss = peak_rss();
+    Ok(m)
+}
+
+/// Run [`measure`] in a child process (`exe bench --one SCENE,KEY,THREADS ...`) and parse
+/// its line.
+pub fn measure_in_child(
+    exe: &std::path::Path,
+    scene: Scene,
+    what: What,
+    threads: usize,
+    plan: &Plan,
+) -> Result<Measure, String> {
+    let out = std::process::Command::new(exe)
+        .args([
+            "bench",
+            "--one",
+            &format!("{},{},{threads}", scene.name(), what.key()),
+            "--size",
+            &format!("{}x{}", plan.size.0, plan.size.1),
+            "--seed",
+            &plan.seed.to_string(),
+            "--band-lines",
+            &plan.band_lines.to_string(),
+            "--warmup",
+            &plan.warmup.to_string(),
+            "--reps",
+            &plan.reps.to_string(),
+        ])
+        .output()
+        .map_err(|e| format!("cannot run {}: {e}", exe.display()))?;
+    let text = String::from_utf8_lossy(&out.stdout);
+    if !out.status.success() {
+        return Err(format!(
+            "{} {} {threads} threads: child failed: {}",
+            scene.name(),
+            what.key(),
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    text.lines()
+        .find_map(Measure::from_line)
+        .ok_or_else(|| format!("child printed no measure: {text}"))
+}
+
+/// Every configuration of a bench run, each in a child process: per scene the process with
+/// its primitives only, the replay (one thread), every method at every thread count, and MLAB 4
+/// at each band height of `bands` (one thread and the most threads).
+pub fn run(
+    exe: &std::path::Path,
+    scenes: &[Scene],
+    plan: &Plan,
+    bands: &[u32],
+    mut log: impl FnMut(&Measure),
+) -> Result<Vec<Measure>, String> {
+    let mut all = Vec::new();
+    let mut go = |scene, what, threads, plan: &Plan, all: &mut Vec<Measure>| -> Result<(), String> {
+        let m = measure_in_child(exe, scene, what, threads, plan)?;
+        log(&m);
+        all.push(m);
+        Ok(())
+    };
+    for &scene in scenes {
+        go(scene, What::Idle, 1, plan, &mut all)?;
+        go(scene, What::Replay, 1, plan, &mut all)?;
+        go(scene, What::Raster, 1, plan, &mut all)?;
+        for &t in &plan.threads {
+            for method in TiledMethod::ALL {
+                go(scene, What::Frame(method), t, plan, &mut all)?;
+            }
+        }
+        let tmax = plan.threads.iter().copied().max().unwrap_or(1);
+        for &l in bands.iter().filter(|&&l| l != plan.band_lines) {
+            let p = Plan {
+                band_lines: l,
+                ..plan.clone()
+            };
+            let mut ts = vec![1, tmax];
+            ts.dedup();
+            for t in ts {
+                go(scene, What::Frame(TiledMethod::Mlab4), t, &p, &mut all)?;
+            }
+        }
+    }
+    Ok(all)
+}
+
+/// MLAB 4 against band height (from the measures of [`run`] with several band heights).
+pub fn band_table(all: &[Measure]) -> String {
+    let mut rows: Vec<&Measure> = all
+        .iter()
+        .filter(|m| m.what == What::Frame(TiledMethod::Mlab4))
+        .collect();
+    rows.sort_by_key(|m| (m.scene as usize, m.threads, m.band_lines));
+    let mut s = String::from(
+        "| scene | threads | lines per band | ms (median) | spread | ns / fragment | peak RSS MiB |\n|---|---:|---:|---:|---:|---:|---:|\n",
+    );
+    for m in rows {
+        s += &format!(
+            "| {} | {} | {} | {:.2} | {:.0}% | {:.2} | {:.1} |\n",
+            m.scene.name(),
+            m.threads,
+            m.band_lines,
+            m.timing.median * 1e3,
+            m.timing.spread_percent(),
+            m.ns_per_fragment(),
+            mib(m.peak_rss)
+        );
+    }
+    s
+}
+
+fn mib(b: u64) -> f64 {
+    b as f64 / 1048576.0
+}
+
+/// The tables of a bench run (markdown).
+pub fn tables(all: &[Measure]) -> String {
+    let mut s = String::new();
+    s += "## Frame timings (median, spread = (max - min) / median; memory = peak RSS of the child process)\n\n";
+    s += "| scene | method | threads | ms (median) | min - max ms | spread | CPU ms | CPU / wall | ns / fragment | CPU ns / fragment | peak RSS MiB | accounted MiB | RSS / accounted | bytes / pixel (RSS) | time / MLAB 4 | CPU / MLAB 4 | CPU / replay |\n";
+    s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for m in all.iter().filter(|m| m.what != What::Idle) {
+        let find = |what: What, threads: usize| {
+            all.iter()
+                .find(|x| x.scene == m.scene && x.what == what && x.threads == threads && x.band_lines == m.band_lines)
+        };
+        let ratio = |x: Option<&Measure>| {
+            x.map_or("-".to_string(), |x| {
+                format!("{:.2}x", m.timing.median / x.timing.median)
+            })
+        };
+        let cpu_ratio =
+            |x: Option<&Measure>| x.map_or("-".to_string(), |x| format!("{:.2}x", m.timing.cpu / x.timing.cpu));
+        // Per fragment, one thread against the one-thread replay, in CPU time.
+        let per_replay = |x: Option<&Measure>| match x {
+            Some(x) if m.threads == 1 => format!("{:.2}x", m.cpu_ns_per_fragment() / x.cpu_ns_per_fragment()),
+            _ => "-".to_string(),
+        };
+        let (acc, rel) = match m.what {
+            What::Frame(_) => (
+                format!("{:.1}", mib(m.accounted())),
+                format!("{:.2}", m.peak_rss as f64 / m.accounted() as f64),
+            ),
+            _ => ("-".into(), "-".into()),
+        };
+        s += &format!(
+            "| {} ({:.1} M frags) | {} | {} | {:.2} | {:.2} - {:.2} | {:.0}% | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {acc} | {rel} | {:.1} | {} | {} | {} |\n",
+            m.scene.name(),
+            m.fragments as f64 / 1e6,
+            m.what.name(),
+            m.threads,
+            m.timing.median * 1e3,
+            m.timing.min * 1e3,
+            m.timing.max * 1e3,
+            m.timing.spread_percent(),
+            m.timing.cpu * 1e3,
+            m.timing.cpu_per_wall,
+            m.ns_per_fragment(),
+            m.cpu_ns_per_fragment(),
+            mib(m.peak_rss),
+            m.peak_rss as f64 / m.pixels as f64,
+            ratio(find(What::Frame(TiledMethod::Mlab4), m.threads)),
+            cpu_ratio(find(What::Frame(TiledMethod::Mlab4), m.threads)),
+            per_replay(find(What::Replay, 1)),
+        );
+    }
+    for m in all.iter().filter(|m| m.what == What::Idle) {
+        s += &format!(
+            "\nProcess with only {}'s primitives ({:.2} MiB of them): peak RSS {:.1} MiB.",
+            m.scene.name(),
+            mib(m.prims),
+            mib(m.peak_rss)
+        );
+    }
+    s += "\n\n## Scaling (speedup and parallel efficiency over 1 thread)\n\n| scene | method | threads | speedup | efficiency |\n|---|---|---:|---:|---:|\n";
+    for m in all.iter().filter(|m| m.threads > 1) {
+        if let Some(one) = all
+            .iter()
+            .find(|x| x.scene == m.scene && x.what == m.what && x.threads == 1 && x.band_lines == m.band_lines)
+        {
+            let sp = one.timing.median / m.timing.median;
+            s += &format!(
+                "| {} | {} | {} | {:.2} | {:.0}% |\n",
+                m.scene.name(),
+                m.what.name(),
+                m.threads,
+                sp,
+                100.0 * sp / m.threads as f64
+            );
+        }
+    }
+    let px = all.first().map_or(0, |m| m.pixels);
+    s += &format!(
+        "\n## Storage per frame ([`storage_bytes`]: target + RGBA8 output), {px} pixels\n\n| method | bytes / pixel |\n|---|---:|\n"
+    );
+    for method in [TiledMethod::Mlab4, TiledMethod::Wboit, TiledMethod::Over] {
+        s += &format!("| {} | {} |\n", method.name(), storage_bytes(method, 1, 0));
+    }
+    for m in all
+        .iter()
+        .filter(|m| m.what == What::Frame(TiledMethod::ABuffer) && m.threads == 1)
+    {
+        let whole = storage_bytes(TiledMethod::ABuffer, m.pixels, m.fragments as usize);
+        s += &format!(
+            "| A-buffer on {}, whole frame as Table 1 counts it (12 B x {} fragments + heads) | {:.1} |\n| A-buffer on {}, tiled: the largest band's {} fragments | {:.1} |\n",
+            m.scene.name(),
+            m.fragments,
+            whole as f64 / m.pixels as f64,
+            m.scene.name(),
+            m.band_fragments,
+            storage_bytes(TiledMethod::ABuffer, m.pixels, m.band_fragments as usize) as f64 / m.pixels as f64
+        );
+    }
+    s
 }
 
 /// The scaling plot: speedup over one thread against threads, one line per scene and
@@ -242,11 +627,11 @@ pub fn scaling_svg(results: &[Measure], title: &str) -> String {
     ];
     let mut series: Vec<(String, String)> = Vec::new();
     for m in results {
-        let key = (m.scene.clone(), m.what.clone());
+        let key = (m.scene.name().to_string(), m.what.name().to_string());
         if !series.contains(&key)
             && results
                 .iter()
-                .filter(|x| (&x.scene, &x.what) == (&key.0, &key.1))
+                .filter(|x| (x.scene.name(), x.what.name()) == (key.0.as_str(), key.1.as_str()))
                 .count()
                 > 1
         {
@@ -256,7 +641,7 @@ pub fn scaling_svg(results: &[Measure], title: &str) -> String {
     for (i, (scene, what)) in series.iter().enumerate() {
         let pts: Vec<&Measure> = results
             .iter()
-            .filter(|m| &m.scene == scene && &m.what == what)
+            .filter(|m| m.scene.name() == scene && m.what.name() == what)
             .collect();
         let Some(one) = pts.iter().find(|m| m.threads == 1) else {
             continue;

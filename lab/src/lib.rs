@@ -1,8 +1,8 @@
 //! oit-lab: how close to the exact image is MLAB with `M` rows on a kind of scene, and what
 //! do the other order-independent transparency methods give for the same memory?
 //!
-//! - [`scenes`]: seven deterministic procedural scenes emitting fragment streams in
-//!   submission order ([`stream`]).
+//! - [`scenes`]: seven deterministic procedural scenes as primitive lists with their span
+//!   rasterizers; the fragment streams in submission order ([`stream`]) come from them.
 //! - [`methods`]: the exact A-buffer reference and every method as a compositor over the
 //!   same stream (MLAB and HT from the `mlab` kernel).
 //! - [`metrics`]: RMSE, PSNR, max error, FLIP, background visibility bias; PSNR and
@@ -12,17 +12,18 @@
 //! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.
 //! - [`report`]: the whole evaluation of one stream.
 //! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.
-//! - [`frame`]: whole frames on every core (band-binned, `rayon`), MLAB and the baselines.
+//! - [`tiled`]: whole frames on every core: primitives binned into bands and rasterized
+//!   straight into each method's target (`rayon`), MLAB and the baselines.
 
 #![forbid(unsafe_code)]
 
 pub mod bench;
 pub mod dump;
 pub mod faint;
-pub mod frame;
 pub mod methods;
 pub mod metrics;
 pub mod picture;
 pub mod report;
 pub mod scenes;
 pub mod stream;
+pub mod tiled;

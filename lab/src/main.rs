@@ -65,8 +65,10 @@ u64 count, then per fragment u32 x, u32 y, f32 depth, 3 x f32 premultiplied colo
 ";
 
 const BENCH_HELP: &str = "\
-oit-lab bench: composite whole frames (band-binned, rayon) with MLAB 4 lanes, the A-buffer,
-WBOIT and OVER; median and spread of repeated runs, thread scaling, memory per frame
+oit-lab bench: whole frames with the tiled renderer (primitives binned into bands, rasterized
+straight into each method's target, rayon): MLAB 4 (both arithmetics), the A-buffer, WBOIT and
+OVER, and the kernel-only replay of MLAB 4's span inserts; median and spread of repeated frames,
+thread scaling, peak resident memory of a child process per configuration
 
 USAGE:
     oit-lab bench [OPTIONS]
@@ -74,12 +76,13 @@ USAGE:
 OPTIONS:
     --size WxH        frame size (default 1280x720)
     --seed N          scene seed (default 1)
-    --scenes A,B,...  scenes (default HAIR,PARTICLES)
+    --scenes A,B,...  scenes (default HAIR,PARTICLES,FOG,SPLATS)
     --threads 1,2,..  thread counts (default 1, 2, 4, 8, 16 up to the machine's cores)
-    --band-lines N    lines per band (default oit_lab::frame::DEFAULT_BAND_LINES)
-    --bands A,B,...   also time MLAB 4 at these band heights (all threads)
-    --warmup N        untimed runs first (default 3)
-    --reps N          timed runs, median reported (default 15)
+    --band-lines N    lines per band (default oit_lab::tiled::DEFAULT_BAND_LINES)
+    --bands A,B,...   also time MLAB 4 at these band heights (1 thread and the most threads)
+    --warmup N        untimed frames first (default 2)
+    --reps N          timed frames, median reported (default 7)
+    --one S,M,T       (internal) measure scene S, method M, T threads in this process
     --svg FILE        write the scaling plot there
     -h, --help        this text
 ";
@@ -397,37 +400,30 @@ fn parse_list<T: std::str::FromStr>(a: &mut Args, name: &str) -> Result<Option<V
         .map(Some)
 }
 
+fn first<T: Copy>(v: Option<Vec<T>>, default: T) -> T {
+    v.and_then(|v| v.first().copied()).unwrap_or(default)
+}
+
 fn cmd_bench(mut a: Args) -> Result<(), Fail> {
-    use oit_lab::bench::{Plan, bands, run, scaling_svg};
-    use oit_lab::frame::{DEFAULT_BAND_LINES, FrameMethod};
+    use oit_lab::bench::{Plan, What, band_table, measure, run, scaling_svg, tables};
+    use oit_lab::tiled::DEFAULT_BAND_LINES;
     let size = match a.value("--size")? {
         Some(s) => parse_size(&s)?,
         None => (1280, 720),
     };
     let seed = parse_seed(&mut a)?;
-    let scenes = match a.value("--scenes")? {
-        Some(list) => list
-            .split(',')
-            .map(|n| Scene::from_name(n.trim()).ok_or_else(|| usage(format!("--scenes: unknown scene '{n}'"))))
-            .collect::<Result<Vec<_>, _>>()?,
-        None => vec![Scene::Hair, Scene::Particles],
-    };
+    let scenes = parse_scenes(&mut a, &[Scene::Hair, Scene::Particles, Scene::Fog, Scene::Splats])?;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let threads = parse_list::<usize>(&mut a, "--threads")?
         .unwrap_or_else(|| [1, 2, 4, 8, 16].into_iter().filter(|&t| t <= cores).collect());
     if threads.contains(&0) {
         return Err(usage("--threads: counts must be at least 1"));
     }
-    let band_lines = parse_list::<u32>(&mut a, "--band-lines")?
-        .and_then(|v| v.first().copied())
-        .unwrap_or(DEFAULT_BAND_LINES);
-    let band_list = parse_list::<u32>(&mut a, "--bands")?;
-    let warmup = parse_list::<usize>(&mut a, "--warmup")?
-        .and_then(|v| v.first().copied())
-        .unwrap_or(3);
-    let reps = parse_list::<usize>(&mut a, "--reps")?
-        .and_then(|v| v.first().copied())
-        .unwrap_or(15);
+    let band_lines = first(parse_list::<u32>(&mut a, "--band-lines")?, DEFAULT_BAND_LINES).max(1);
+    let bands = parse_list::<u32>(&mut a, "--bands")?.unwrap_or_default();
+    let warmup = first(parse_list::<usize>(&mut a, "--warmup")?, 2);
+    let reps = first(parse_list::<usize>(&mut a, "--reps")?, 7);
+    let one = a.value("--one")?;
     let svg = a.value("--svg")?.map(PathBuf::from);
     a.finish()?;
     let plan = Plan {
@@ -435,139 +431,64 @@ fn cmd_bench(mut a: Args) -> Result<(), Fail> {
         reps,
         threads: threads.clone(),
         band_lines,
+        size,
+        seed,
     };
+    if let Some(one) = one {
+        // A child: one configuration, one line.
+        let parts: Vec<&str> = one.split(',').collect();
+        let (Some(scene), Some(what), Some(t)) = (
+            parts.first().and_then(|s| Scene::from_name(s)),
+            parts.get(1).and_then(|s| What::from_key(s)),
+            parts.get(2).and_then(|s| s.parse::<usize>().ok()),
+        ) else {
+            return Err(usage(format!("--one: expected SCENE,METHOD,THREADS, got '{one}'")));
+        };
+        let m = measure(scene, what, t.max(1), &plan).map_err(runtime)?;
+        println!("{}", m.to_line());
+        return Ok(());
+    }
+    let exe = std::env::current_exe().map_err(|e| runtime(format!("cannot find this program: {e}")))?;
     println!(
-        "# oit-lab bench: {}x{}, seed {seed}, bands of {band_lines} lines, {warmup} warm-up + {reps} timed runs, \
-         threads {threads:?} ({cores} cores available), lanes backend {}\n",
+        "# oit-lab bench: {}x{}, seed {seed}, bands of {band_lines} lines, {warmup} warm-up + {reps} timed frames, \
+         threads {threads:?} ({cores} cores available), lanes backend {}, one child process per configuration\n",
         size.0,
         size.1,
         mlab::lanes::BACKEND
     );
-    let mut all = Vec::new();
-    let mut band_rows = Vec::new();
-    for sc in &scenes {
-        let stream = sc.generate(size.0, size.1, seed);
-        stream
-            .validate()
-            .map_err(|(i, e)| runtime(format!("{}: fragment {i}: {e}", sc.name())))?;
-        eprintln!("{}: {} fragments", sc.name(), stream.frags.len());
-        let r = run(sc.name(), &stream, &plan, |m| {
-            eprintln!(
-                "  {} {} threads: {:.2} ms ({:.2} ns/fragment, spread {:.0}%)",
-                m.what,
-                m.threads,
-                m.timing.median * 1e3,
-                m.ns_per_fragment(),
-                m.timing.spread_percent()
-            )
-        })
-        .map_err(runtime)?;
-        all.extend(r);
-        if let Some(list) = &band_list {
-            let t = threads.iter().copied().max().unwrap_or(1);
-            for (l, timing) in bands(&stream, &plan, list, t).map_err(runtime)? {
-                band_rows.push((sc.name(), l, t, stream.frags.len(), timing));
-            }
-        }
-    }
-    // Frame-level table.
-    println!("## Frame timings (median of {reps}, spread = (max - min) / median)\n");
-    println!(
-        "| scene | method | threads | ms (median) | min - max ms | spread | CPU / wall | ns / fragment | frames / s | memory / frame | time / MLAB 4 |"
-    );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    for m in &all {
-        let fragments = m.fragments;
-        let px = size.0 as usize * size.1 as usize;
-        let mem = FrameMethod::ALL
-            .into_iter()
-            .find(|f| m.what == f.name())
-            .map_or("-".to_string(), |f| {
-                format!("{:.1} MiB", f.frame_bytes(px, fragments) as f64 / 1048576.0)
-            });
-        let mlab = all
-            .iter()
-            .find(|x| x.scene == m.scene && x.threads == m.threads && x.what == FrameMethod::Mlab4.name());
-        let ratio = mlab.map_or("-".to_string(), |x| {
-            format!("{:.2}x", m.timing.median / x.timing.median)
-        });
-        println!(
-            "| {} ({:.2} M frags) | {} | {} | {:.2} | {:.2} - {:.2} | {:.0}% | {:.2} | {:.2} | {:.1} | {mem} | {ratio} |",
-            m.scene,
-            fragments as f64 / 1e6,
-            m.what,
+    let all = run(&exe, &scenes, &plan, &bands, |m| {
+        eprintln!(
+            "  {} {} {} threads, {} lines: {:.2} ms ({:.2} ns/fragment, spread {:.0}%, peak RSS {:.1} MiB)",
+            m.scene.name(),
+            m.what.name(),
             m.threads,
+            m.band_lines,
             m.timing.median * 1e3,
-            m.timing.min * 1e3,
-            m.timing.max * 1e3,
-            m.timing.spread_percent(),
-            m.timing.cpu_per_wall,
             m.ns_per_fragment(),
-            1.0 / m.timing.median,
+            m.timing.spread_percent(),
+            m.peak_rss as f64 / 1048576.0
+        )
+    })
+    .map_err(runtime)?;
+    let (main_runs, band_runs): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|m| m.band_lines == band_lines);
+    println!("{}", tables(&main_runs));
+    if !band_runs.is_empty() {
+        let mut b: Vec<_> = band_runs;
+        b.extend(
+            main_runs
+                .iter()
+                .filter(|m| m.what == What::Frame(oit_lab::tiled::TiledMethod::Mlab4))
+                .cloned(),
         );
-    }
-    println!("\n## Scaling (speedup and parallel efficiency over 1 thread)\n");
-    println!("| scene | method | threads | speedup | efficiency |\n|---|---|---:|---:|---:|");
-    for m in all.iter().filter(|m| m.threads > 1) {
-        if let Some(one) = all
-            .iter()
-            .find(|x| x.scene == m.scene && x.what == m.what && x.threads == 1)
-        {
-            let s = one.timing.median / m.timing.median;
-            println!(
-                "| {} | {} | {} | {:.2} | {:.0}% |",
-                m.scene,
-                m.what,
-                m.threads,
-                s,
-                100.0 * s / m.threads as f64
-            );
-        }
-    }
-    if !band_rows.is_empty() {
-        println!(
-            "\n## MLAB 4: band height\n\n| scene | lines per band | threads | ms (median) | spread | ns / fragment |\n|---|---:|---:|---:|---:|---:|"
-        );
-        for (scene, l, t, n, timing) in &band_rows {
-            println!(
-                "| {scene} | {l} | {t} | {:.2} | {:.0}% | {:.2} |",
-                timing.median * 1e3,
-                timing.spread_percent(),
-                timing.median * 1e9 / *n as f64
-            );
-        }
-    }
-    println!(
-        "\n## Memory per frame at {}x{} (the paper's Table 1 accounting)\n",
-        size.0, size.1
-    );
-    println!("| method | bytes / pixel | MB (MiB) per frame |\n|---|---:|---:|");
-    let px = size.0 as f64 * size.1 as f64;
-    for (name, bpp) in [
-        ("MLAB 2 rows (RGBA8 + f32 depth per row)", 16.0),
-        ("MLAB 4 rows", 32.0),
-        ("MLAB 8 rows", 64.0),
-        ("OVER RGBA16F", 8.0),
-        ("WBOIT RGBA16F + R8", 9.0),
-    ] {
-        println!("| {name} | {bpp} | {:.1} |", bpp * px / 1048576.0);
-    }
-    for m in all
-        .iter()
-        .filter(|m| m.what == FrameMethod::ABuffer.name() && m.threads == threads[0])
-    {
-        let bytes = FrameMethod::ABuffer.frame_bytes(size.0 as usize * size.1 as usize, m.fragments);
-        println!(
-            "| A-buffer on {} (12 B x {} fragments + 4 B head per pixel) | {:.1} | {:.1} |",
-            m.scene,
-            m.fragments,
-            bytes as f64 / px,
-            bytes as f64 / 1048576.0
-        );
+        println!("## MLAB 4 against band height\n\n{}", band_table(&b));
     }
     if let Some(path) = svg {
-        let title = format!("Frame compositing, {}x{}, {} cores", size.0, size.1, cores);
-        std::fs::write(&path, scaling_svg(&all, &title))
+        let title = format!("Tiled frames, {}x{}, {} cores", size.0, size.1, cores);
+        let frames: Vec<_> = main_runs
+            .into_iter()
+            .filter(|m| matches!(m.what, What::Frame(_)))
+            .collect();
+        std::fs::write(&path, scaling_svg(&frames, &title))
             .map_err(|e| runtime(format!("cannot write {}: {e}", path.display())))?;
         println!("\nScaling plot: {}", path.display());
     }

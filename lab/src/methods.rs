@@ -96,6 +96,36 @@ pub fn r8_blend(dst: u8, factor: f32) -> u8 {
     (dst as f32 / 255.0 * factor * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
 }
 
+/// OVER, one fragment, into an `RGBA16F` target: `C = c + C * (1 - a)`, `T = T * (1 - a)`,
+/// each result rounded to half (the one copy of the formula: [`crate::tiled`] uses it too).
+#[inline]
+pub fn over_step(c: &mut [f32; 3], t: &mut f32, color: [f32; 3], alpha: f32) {
+    for k in 0..3 {
+        c[k] = f16r(color[k] + c[k] * (1.0 - alpha));
+    }
+    *t = f16r(*t * (1.0 - alpha));
+}
+
+/// WBOIT, one fragment of weight `w`: `acc += (c * w, a * w)` in half, `r *= 1 - a` in
+/// unorm8 (the one copy of the formula: [`crate::tiled`] uses it too).
+#[inline]
+pub fn wboit_step(acc: &mut [f32; 4], r: &mut u8, color: [f32; 3], alpha: f32, w: f32) {
+    for k in 0..3 {
+        acc[k] = f16r(acc[k] + color[k] * w);
+    }
+    acc[3] = f16r(acc[3] + alpha * w);
+    *r = r8_blend(*r, 1.0 - alpha);
+}
+
+/// WBOIT's resolve: `C = acc.rgb / max(acc.a, 1e-5) * (1 - r) + bg * r`, non-finite shown
+/// black.
+#[inline]
+pub fn wboit_resolve(acc: [f32; 4], r: u8, bg: [f32; 3]) -> [f32; 3] {
+    let rv = r as f32 / 255.0;
+    let d = acc[3].max(1e-5);
+    std::array::from_fn(|k| finite_or_zero(acc[k] / d * (1.0 - rv) + bg[k] * rv))
+}
+
 /// The WBOIT weight functions of McGuire & Bavoil (2013), Eq. 7-10, and the color-aware
 /// variant of seed 001 (LearnOpenGL).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -646,10 +676,7 @@ fn over(frame: &Frame) -> Image {
         let (mut c, mut t) = (bg.map(f16r), 1.0f32);
         for &i in frame.bins.of(p) {
             let f = &frags[i as usize];
-            for k in 0..3 {
-                c[k] = f16r(f.color[k] + c[k] * (1.0 - f.alpha));
-            }
-            t = f16r(t * (1.0 - f.alpha));
+            over_step(&mut c, &mut t, f.color, f.alpha);
         }
         (c, t)
     })
@@ -699,16 +726,9 @@ fn wboit(frame: &Frame, weight: Weight) -> Image {
         for &i in frame.bins.of(p) {
             let f = &frags[i as usize];
             let w = weight.eval(f.color, f.alpha, f.depth, window_depth(f.depth, nf));
-            for k in 0..3 {
-                acc[k] = f16r(acc[k] + f.color[k] * w);
-            }
-            acc[3] = f16r(acc[3] + f.alpha * w);
-            r = r8_blend(r, 1.0 - f.alpha);
+            wboit_step(&mut acc, &mut r, f.color, f.alpha, w);
         }
-        let rv = r as f32 / 255.0;
-        let d = acc[3].max(1e-5);
-        let c = std::array::from_fn(|k| finite_or_zero(acc[k] / d * (1.0 - rv) + bg[k] * rv));
-        (c, rv)
+        (wboit_resolve(acc, r, bg), r as f32 / 255.0)
     })
 }
 

@@ -1,0 +1,438 @@
+//! The scenes' primitive lists, built from the seed in submission order (the same random
+//! draws, in the same order, as when each primitive was scanned as it was made: the streams
+//! are unchanged, pinned in `lab/tests/scenes_and_dump.rs`).
+
+use super::prims::{FogSlice, Kind, Leaf, Panel, Primitive, SphereBand, Splat, Sprite, Strand, Trunk};
+use super::{Rng, clamp01, lerp3};
+
+/// Collects primitives with their pixel boxes.
+pub(super) struct Builder {
+    pub(super) w: u32,
+    pub(super) h: u32,
+    /// Pixels per unit of frame height.
+    pub(super) s: f32,
+    pub(super) prims: Vec<Primitive>,
+}
+
+impl Builder {
+    pub(super) fn new(w: u32, h: u32) -> Builder {
+        Builder {
+            w,
+            h,
+            s: h as f32,
+            prims: Vec::new(),
+        }
+    }
+
+    /// Add a primitive covering the box `[x0, x1] x [y0, y1]` (in pixels): the pixels whose
+    /// centres a scan of that box visits, clamped to the frame.
+    fn push(&mut self, (x0, y0, x1, y1): (f32, f32, f32, f32), kind: Kind) {
+        let xa = (x0.floor().max(0.0)) as u32;
+        let ya = (y0.floor().max(0.0)) as u32;
+        let xb = (x1.ceil().min(self.w as f32).max(0.0)) as u32;
+        let yb = (y1.ceil().min(self.h as f32).max(0.0)) as u32;
+        self.prims.push(Primitive {
+            x0: xa,
+            y0: ya,
+            x1: xb,
+            y1: yb,
+            kind,
+        });
+    }
+}
+
+/// HAIR: strands hang from a scalp, each a polyline of segments drawn root to tip; a pixel
+/// belongs to the nearest segment of its strand (one fragment per strand per pixel, as a
+/// triangle strip gives). Color goes from blond (near) to dark brown (far) for contrast.
+pub(super) fn hair(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let strands = 2600;
+    let segs = 12;
+    for _ in 0..strands {
+        let u = rng.f();
+        let rx = w * 0.5 + (u - 0.5) * s * 0.9;
+        let ry = s * (0.12 + 0.35 * (u - 0.5) * (u - 0.5)) + rng.range(0.0, 0.03) * s;
+        let len = s * rng.range(0.55, 0.85);
+        let drift = (u - 0.5) * 0.9 + rng.range(-0.15, 0.15);
+        let curl = rng.range(-0.6, 0.6);
+        let z0 = rng.range(8.0, 12.0) - 2.0 * (0.25 - (u - 0.5) * (u - 0.5));
+        let dz = rng.range(-0.5, 0.5);
+        let hw = 0.45 * s / 360.0;
+        let alpha = rng.range(0.3, 0.6);
+        let tint = rng.range(-0.08, 0.08);
+        let mut pts = Vec::with_capacity(segs + 1);
+        for k in 0..=segs {
+            let t = k as f32 / segs as f32;
+            let x = rx + len * (drift * t + curl * t * t * (1.0 - t));
+            let y = ry + len * t;
+            pts.push((x, y, z0 + dz * segs as f32 * t * t));
+        }
+        for i in 0..segs {
+            let (a, b) = ((pts[i].0, pts[i].1), (pts[i + 1].0, pts[i + 1].1));
+            let pad = hw + 1.0;
+            let (x0, x1) = (a.0.min(b.0) - pad, a.0.max(b.0) + pad);
+            let (y0, y1) = (a.1.min(b.1) - pad, a.1.max(b.1) + pad);
+            let (za, zb) = (pts[i].2, pts[i + 1].2);
+            let prev = (i > 0).then(|| (pts[i - 1].0, pts[i - 1].1));
+            let next = (i + 1 < segs).then(|| (pts[i + 2].0, pts[i + 2].1));
+            r.push(
+                (x0, y0, x1, y1),
+                Kind::Strand(Strand {
+                    a,
+                    b,
+                    prev,
+                    next,
+                    hw,
+                    za,
+                    zb,
+                    tint,
+                    alpha,
+                }),
+            );
+        }
+    }
+    [0.8, 0.82, 0.88]
+}
+
+/// PARTICLES: soft round sprites of smoke (grey, faint) and fire (orange, partly or fully
+/// additive), in random order.
+pub(super) fn particles(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    for _ in 0..2600 {
+        let fire = rng.f() < 0.3;
+        let h = if fire {
+            rng.range(0.0, 0.35)
+        } else {
+            rng.range(0.1, 1.0)
+        };
+        let spread = if fire { 0.12 } else { 0.1 + 0.35 * h };
+        let cx = w * 0.5 + rng.range(-1.0, 1.0) * spread * s + h * h * 0.4 * s;
+        let cy = s * (0.95 - 0.9 * h);
+        let rad = s * if fire {
+            rng.range(0.015, 0.045)
+        } else {
+            rng.range(0.02, 0.06) + 0.03 * h
+        };
+        let z = rng.range(20.0, 40.0);
+        let grey = rng.range(0.25, 0.6);
+        let a0 = if fire { 0.0 } else { rng.range(0.03, 0.15) };
+        let additive_only = fire && rng.f() < 0.3;
+        let fa = if additive_only { 0.0 } else { 0.02 };
+        let heat = rng.range(0.15, 0.45);
+        r.push(
+            (cx - rad, cy - rad, cx + rad, cy + rad),
+            Kind::Sprite(Sprite {
+                cx,
+                cy,
+                rad,
+                z,
+                fire,
+                fa,
+                heat,
+                grey,
+                a0,
+            }),
+        );
+    }
+    [0.05, 0.05, 0.08]
+}
+
+/// FOREST: trees in random order, each a trunk then its leaves; leaves are ellipses with an
+/// alpha edge (opaque-ish core, soft border), slightly tilted in depth.
+pub(super) fn forest(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let trees = 36;
+    for _ in 0..trees {
+        let z = rng.range(10.0, 80.0);
+        let scale = 10.0 / z;
+        let bx = rng.range(-0.1, 1.1) * w;
+        let by = s * (0.75 + 0.25 * scale);
+        let height = s * 0.9 * scale;
+        let top = (bx, by - height);
+        let trunk_hw = s * 0.02 * scale;
+        r.push(
+            (bx - trunk_hw - 1.0, top.1 - 1.0, bx + trunk_hw + 1.0, by + 1.0),
+            Kind::Trunk(Trunk {
+                bx,
+                by,
+                top,
+                hw: trunk_hw,
+                z,
+            }),
+        );
+        let crown = height * 0.45;
+        for _ in 0..260 {
+            let (ux, uy) = rng.unit2();
+            let rr = rng.f().sqrt() * crown;
+            let cx = top.0 + ux * rr;
+            let cy = top.1 + crown * 0.4 + uy * rr * 0.8;
+            let (ax, ay) = rng.unit2();
+            let (la, lb) = (s * 0.035 * scale, s * 0.018 * scale);
+            let lz = z + rng.range(-2.0, 2.0);
+            let (tx, ty) = (rng.range(-0.1, 0.1), rng.range(-0.1, 0.1));
+            let col = [rng.range(0.08, 0.3), rng.range(0.35, 0.65), rng.range(0.05, 0.15)];
+            let edge = 1.0 + s * scale * 0.02;
+            r.push(
+                (cx - la, cy - la, cx + la, cy + la),
+                Kind::Leaf(Leaf {
+                    cx,
+                    cy,
+                    ax,
+                    ay,
+                    la,
+                    lb,
+                    lz,
+                    tx,
+                    ty,
+                    s,
+                    col,
+                    edge,
+                }),
+            );
+        }
+    }
+    [0.55, 0.7, 0.9]
+}
+
+const PALETTE: [[f32; 3]; 8] = [
+    [0.9, 0.15, 0.1],
+    [0.1, 0.7, 0.2],
+    [0.15, 0.3, 0.95],
+    [0.95, 0.8, 0.1],
+    [0.8, 0.2, 0.8],
+    [0.1, 0.8, 0.85],
+    [0.95, 0.5, 0.1],
+    [0.5, 0.9, 0.3],
+];
+
+/// TEAPOTS (a PWRPLANT stand-in): intersecting spheres, each rasterized as horizontal bands
+/// of front and back faces submitted in a shuffled order (like an unsorted mesh); alpha
+/// rises towards the silhouette (Fresnel-like).
+pub(super) fn teapots(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let focal = s * 1.1;
+    for _ in 0..22 {
+        let cx = rng.range(0.05, 0.95) * w;
+        let cy = rng.range(0.1, 0.9) * s;
+        let rad = s * rng.range(0.1, 0.28);
+        let zc = rng.range(20.0, 40.0);
+        let rw = rad * zc / focal;
+        let col = PALETTE[rng.below(PALETTE.len())];
+        let a0 = rng.range(0.2, 0.45);
+        // Bands of whole pixel rows, so that no pixel is scanned twice.
+        let band = (s * 0.02).max(2.0).floor();
+        let top = (cy - rad - 1.0).floor();
+        let bands = ((2.0 * rad + 2.0) / band).ceil() as usize + 1;
+        let mut order: Vec<(usize, bool)> = (0..bands).flat_map(|b| [(b, true), (b, false)]).collect();
+        rng.shuffle(&mut order);
+        for (b, front) in order {
+            let y0 = top + b as f32 * band;
+            r.push(
+                (cx - rad - 1.0, y0, cx + rad + 1.0, y0 + band),
+                Kind::SphereBand(SphereBand {
+                    cx,
+                    cy,
+                    rad,
+                    zc,
+                    rw,
+                    col,
+                    a0,
+                    front,
+                }),
+            );
+        }
+    }
+    [0.45, 0.45, 0.48]
+}
+
+/// GLASS: tinted panels of high alpha, each with a front and a back face, slanted in depth
+/// so that some intersect.
+pub(super) fn glass(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let tints = [
+        [0.7, 0.85, 1.0],
+        [0.75, 1.0, 0.8],
+        [1.0, 0.85, 0.55],
+        [0.9, 0.9, 0.95],
+        [1.0, 0.7, 0.7],
+    ];
+    for _ in 0..9 {
+        let (cx, cy) = (rng.range(0.15, 0.85) * w, rng.range(0.2, 0.8) * s);
+        let (hx, hy) = (s * rng.range(0.12, 0.35), s * rng.range(0.1, 0.3));
+        let z = rng.range(5.0, 15.0);
+        let thick = rng.range(0.3, 1.5);
+        let (sx, sy) = (rng.range(-6.0, 6.0) / s, rng.range(-3.0, 3.0) / s);
+        let tint = tints[rng.below(tints.len())];
+        let alpha = rng.range(0.55, 0.85);
+        let back_first = rng.f() < 0.5;
+        for face in 0..2 {
+            let front = (face == 0) != back_first;
+            r.push(
+                (cx - hx - 1.0, cy - hy - 1.0, cx + hx + 1.0, cy + hy + 1.0),
+                Kind::Panel(Panel {
+                    cx,
+                    cy,
+                    hx,
+                    hy,
+                    z,
+                    sx,
+                    sy,
+                    thick,
+                    tint,
+                    alpha,
+                    front,
+                }),
+            );
+        }
+    }
+    [0.75, 0.72, 0.65]
+}
+
+/// FOG: a volume of faint slices over a bright sky (issue 9). Each slice is a soft
+/// superellipse `q = (dx/hx)^4 + (dy/hy)^4 < 1` with density `(1 - q)^2`, modulated by three
+/// soft puffs; its alpha runs from `1/255` at the rim to the slice's peak (0.006 to 0.05, skewed
+/// low: `0.006 + 0.044 u^2`), so
+/// every fragment's alpha is in `[1/255, 0.05]`. Color depends on depth (warm and bright near,
+/// cool and darker far) and a little on height, so compositing out of order shows. Slices are
+/// made front to back at stratified depths, then submitted in shuffled order.
+pub(super) fn fog(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let slices = FOG_SLICES;
+    let (z_near, z_far) = (4.0f32, 60.0f32);
+    struct Slice {
+        z: f32,
+        c: (f32, f32),
+        h: (f32, f32),
+        peak: f32,
+        puffs: [(f32, f32, f32); 3],
+        tint: f32,
+    }
+    let mut list: Vec<Slice> = (0..slices)
+        .map(|i| {
+            let z = z_near + (z_far - z_near) * (i as f32 + rng.f()) / slices as f32;
+            let c = (w * 0.5 + rng.range(-0.35, 0.35) * s, s * rng.range(0.35, 0.65));
+            let h = (s * rng.range(0.55, 1.15), s * rng.range(0.3, 0.55));
+            let u = rng.f();
+            let peak = 0.006 + 0.044 * u * u;
+            let puffs = [0; 3].map(|_| {
+                (
+                    c.0 + rng.range(-1.0, 1.0) * h.0,
+                    c.1 + rng.range(-1.0, 1.0) * h.1,
+                    s * rng.range(0.15, 0.4),
+                )
+            });
+            let tint = rng.range(-0.05, 0.05);
+            Slice {
+                z,
+                c,
+                h,
+                peak,
+                puffs,
+                tint,
+            }
+        })
+        .collect();
+    rng.shuffle(&mut list);
+    let amin = 1.0 / 255.0;
+    for sl in &list {
+        let k = (sl.z - z_near) / (z_far - z_near);
+        let near = [1.0, 0.9, 0.75];
+        let far = [0.55, 0.62, 0.75];
+        let base = lerp3(near, far, clamp01(k + sl.tint));
+        r.push(
+            (sl.c.0 - sl.h.0, sl.c.1 - sl.h.1, sl.c.0 + sl.h.0, sl.c.1 + sl.h.1),
+            Kind::FogSlice(FogSlice {
+                z: sl.z,
+                c: sl.c,
+                h: sl.h,
+                peak: sl.peak,
+                puffs: sl.puffs,
+                base,
+                s,
+                amin,
+            }),
+        );
+    }
+    [0.92, 0.95, 1.0]
+}
+
+/// Number of FOG slices.
+const FOG_SLICES: usize = 320;
+
+/// Number of SPLATS splats.
+const SPLAT_COUNT: usize = 12_000;
+
+/// The Gaussian falloff of a splat without transcendental functions:
+/// `(1 - q/18)^9` for `q = (x/sigma)^2 + (y/sigma)^2 < 18`, 0 beyond. It is
+/// `(1 - q/(2n))^n` with `n = 9`, which tends to `exp(-q/2)` as `n` grows; with `n = 9` it
+/// is within 0.032 of `exp(-q/2)` everywhere (largest gap near `q = 3.85`, 0.115 against
+/// 0.146), and it reaches 0 exactly at 3 sigma, where 3D Gaussian Splatting cuts its splats.
+pub fn splat_falloff(q: f32) -> f32 {
+    if !(0.0..18.0).contains(&q) {
+        return 0.0;
+    }
+    let x = 1.0 - q / 18.0;
+    let x2 = x * x;
+    let x4 = x2 * x2;
+    x4 * x4 * x
+}
+
+/// SPLATS: a dense cloud of soft anisotropic Gaussian splats, as a 3D Gaussian Splatting
+/// renderer emits them: per splat a 2D elliptical footprint, `alpha = min(0.99, opacity *
+/// falloff)` ([`splat_falloff`]), fragments below `1/255` dropped, splats in random order.
+/// Centres are drawn around six clusters (a sum of three uniforms per axis, bell-shaped)
+/// and projected with a pinhole camera (focal length 1.2 frame heights); footprints shrink
+/// with depth. Opacities are skewed low (`0.02 + 0.93 u^2`). Color is a depth gradient (warm
+/// near, blue far) (three quarters) mixed with a per-cluster hue (a quarter) and a per-splat jitter of
+/// +-0.05.
+pub(super) fn splats(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
+    let (w, s) = (r.w as f32, r.s);
+    let focal = 1.2 * s;
+    let (z_near, z_far) = (3.0f32, 7.0f32);
+    let clusters: Vec<([f32; 3], [f32; 3], [f32; 3])> = (0..6)
+        .map(|_| {
+            let c = [rng.range(-1.5, 1.5), rng.range(-0.8, 0.8), rng.range(3.6, 6.4)];
+            let rad = [rng.range(0.5, 1.1), rng.range(0.4, 0.8), rng.range(0.6, 1.2)];
+            let hue = PALETTE[rng.below(PALETTE.len())];
+            (c, rad, hue)
+        })
+        .collect();
+    let bell = |rng: &mut Rng| (rng.f() + rng.f() + rng.f() - 1.5) / 1.5;
+    for _ in 0..SPLAT_COUNT {
+        let (c, rad, hue) = clusters[rng.below(clusters.len())];
+        let p = [0, 1, 2].map(|i| c[i] + rad[i] * bell(rng));
+        let z = p[2].clamp(z_near, z_far);
+        let (sx, sy) = (w * 0.5 + focal * p[0] / z, s * 0.5 + focal * p[1] / z);
+        let major = rng.range(0.015, 0.06);
+        let minor = major * rng.range(0.25, 1.0);
+        // Screen sigmas, at least 0.3 px (a splat smaller than a pixel still covers its centre
+        // pixel, as the screen-space dilation of 3D Gaussian Splatting ensures).
+        let (sa, sb) = ((focal * major / z).max(0.3), (focal * minor / z).max(0.3));
+        let (ax, ay) = rng.unit2();
+        let opacity = {
+            let u = rng.f();
+            0.02 + 0.93 * u * u
+        };
+        // Warm at z = 3.5, blue at z = 6 (most of the cloud lies in between).
+        let k = clamp01((z - 3.5) / 2.5);
+        let depth_color = lerp3([0.98, 0.62, 0.3], [0.2, 0.4, 0.95], k);
+        let jitter = [0; 3].map(|_| rng.range(-0.05, 0.05));
+        let color = [0, 1, 2].map(|i| clamp01(0.75 * depth_color[i] + 0.25 * hue[i] + jitter[i]));
+        let ext = 3.0 * sa.max(sb) + 1.0;
+        r.push(
+            (sx - ext, sy - ext, sx + ext, sy + ext),
+            Kind::Splat(Splat {
+                sx,
+                sy,
+                ax,
+                ay,
+                sa,
+                sb,
+                opacity,
+                z,
+                color,
+            }),
+        );
+    }
+    [0.9, 0.9, 0.92]
+}

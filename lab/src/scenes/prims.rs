@@ -1,0 +1,426 @@
+//! The primitives of the scenes: one struct per kind, with what its rasterizer evaluates at a
+//! pixel centre ([`Shade`]), and the scene's list of them in submission order.
+
+use super::{clamp01, lerp3, seg_dist};
+use crate::stream::Stream;
+
+/// What a primitive gives at one pixel centre: depth, straight color, alpha (coverage
+/// included), and additive light (premultiplied, added on top of `color * alpha`).
+#[derive(Clone, Copy, Debug)]
+pub struct Shade {
+    /// Distance from the viewer.
+    pub depth: f32,
+    /// Straight color.
+    pub color: [f32; 3],
+    /// Alpha, coverage included.
+    pub alpha: f32,
+    /// Additive light, premultiplied.
+    pub light: [f32; 3],
+}
+
+/// A scene's primitives in submission order, with the frame they are laid out for.
+#[derive(Clone, Debug)]
+pub struct Primitives {
+    /// Frame width in pixels.
+    pub width: u32,
+    /// Frame height in pixels.
+    pub height: u32,
+    /// Opaque background color.
+    pub background: [f32; 3],
+    /// Primitives in submission order.
+    pub prims: Vec<Primitive>,
+}
+
+impl Primitives {
+    /// The fragment stream: every primitive rasterized over the whole frame, in submission
+    /// order, each primitive's fragments in scan order (line by line, left to right).
+    pub fn stream(&self) -> Stream {
+        use super::PushFrags;
+        let clip = super::Clip::frame(self.width, self.height);
+        let mut frags = Vec::new();
+        for p in &self.prims {
+            p.raster(clip, &mut |x, y, mask, l| {
+                l.push_frags(self.width, x, y, mask, &mut frags)
+            });
+        }
+        Stream {
+            width: self.width,
+            height: self.height,
+            background: self.background,
+            frags,
+        }
+    }
+
+    /// Bytes held by the primitive list.
+    pub fn bytes(&self) -> usize {
+        self.prims.capacity() * std::mem::size_of::<Primitive>()
+    }
+}
+
+/// One primitive: its pixel box (`x0..x1`, `y0..y1`, clamped to the frame) and its kind.
+#[derive(Clone, Copy, Debug)]
+pub struct Primitive {
+    /// First column.
+    pub x0: u32,
+    /// First line.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last line.
+    pub y1: u32,
+    /// What it is.
+    pub kind: Kind,
+}
+
+/// The primitive kinds, each with its own rasterizer (a monomorphized span scan).
+#[derive(Clone, Copy, Debug)]
+pub enum Kind {
+    /// HAIR: one segment of a strand.
+    Strand(Strand),
+    /// PARTICLES: a soft round sprite.
+    Sprite(Sprite),
+    /// FOREST: a trunk.
+    Trunk(Trunk),
+    /// FOREST: a leaf.
+    Leaf(Leaf),
+    /// TEAPOTS: a band of lines of a sphere's front or back face.
+    SphereBand(SphereBand),
+    /// GLASS: one face of a panel.
+    Panel(Panel),
+    /// FOG: a slice.
+    FogSlice(FogSlice),
+    /// SPLATS: a Gaussian splat.
+    Splat(Splat),
+}
+
+/// A strand segment `a-b`; a pixel belongs to the nearest segment of its strand (`prev` and
+/// `next` are the neighbouring segments' far ends).
+#[derive(Clone, Copy, Debug)]
+pub struct Strand {
+    pub(super) a: (f32, f32),
+    pub(super) b: (f32, f32),
+    pub(super) prev: Option<(f32, f32)>,
+    pub(super) next: Option<(f32, f32)>,
+    pub(super) hw: f32,
+    pub(super) za: f32,
+    pub(super) zb: f32,
+    pub(super) tint: f32,
+    pub(super) alpha: f32,
+}
+
+impl Strand {
+    /// A conservative range of pixel-centre `x` on line `py` outside which [`Self::shade`] gives
+    /// nothing (coverage needs distance `< hw + 0.5` to the segment), with a pixel of
+    /// margin; `None` if the line misses the segment's capsule.
+    #[inline(always)]
+    pub(super) fn line_range(&self, py: f32) -> Option<(f32, f32)> {
+        let r = self.hw + 1.5;
+        let (a, b) = (self.a, self.b);
+        let dy = b.1 - a.1;
+        let (t0, t1) = if dy.abs() < 1e-6 {
+            if (a.1 - py).abs() > r {
+                return None;
+            }
+            (0.0, 1.0)
+        } else {
+            let (u, v) = ((py - r - a.1) / dy, (py + r - a.1) / dy);
+            (u.min(v).max(0.0), u.max(v).min(1.0))
+        };
+        if t0 > t1 {
+            return None;
+        }
+        let (x0, x1) = (a.0 + t0 * (b.0 - a.0), a.0 + t1 * (b.0 - a.0));
+        Some((x0.min(x1) - r, x0.max(x1) + r))
+    }
+
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let (a, b) = (self.a, self.b);
+        let (d, t) = seg_dist(px, py, a, b);
+        // Owned by the nearest segment (ties to the earlier one).
+        if let Some(p) = self.prev
+            && seg_dist(px, py, p, a).0 <= d
+        {
+            return None;
+        }
+        if let Some(n) = self.next
+            && seg_dist(px, py, b, n).0 < d
+        {
+            return None;
+        }
+        let cov = clamp01(self.hw + 0.5 - d);
+        if cov <= 0.0 {
+            return None;
+        }
+        let z = self.za + (self.zb - self.za) * t;
+        let k = clamp01((z - 6.0) / 8.0 + self.tint);
+        Some(Shade {
+            depth: z,
+            color: lerp3([0.95, 0.78, 0.45], [0.22, 0.1, 0.04], k),
+            alpha: self.alpha * cov,
+            light: [0.0; 3],
+        })
+    }
+}
+
+/// A smoke or fire sprite.
+#[derive(Clone, Copy, Debug)]
+pub struct Sprite {
+    pub(super) cx: f32,
+    pub(super) cy: f32,
+    pub(super) rad: f32,
+    pub(super) z: f32,
+    pub(super) fire: bool,
+    pub(super) fa: f32,
+    pub(super) heat: f32,
+    pub(super) grey: f32,
+    pub(super) a0: f32,
+}
+
+impl Sprite {
+    /// A conservative range of pixel-centre `x` on line `py` outside which [`Self::shade`] gives
+    /// nothing (inside the disc), with a pixel of margin.
+    #[inline(always)]
+    pub(super) fn line_range(&self, py: f32) -> Option<(f32, f32)> {
+        let dy = py - self.cy;
+        if dy.abs() > self.rad + 1.0 {
+            return None;
+        }
+        let half = (self.rad * self.rad - dy * dy).max(0.0).sqrt() + 1.0;
+        Some((self.cx - half, self.cx + half))
+    }
+
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let (dx, dy) = ((px - self.cx) / self.rad, (py - self.cy) / self.rad);
+        let q = dx * dx + dy * dy;
+        if q >= 1.0 {
+            return None;
+        }
+        let fall = (1.0 - q) * (1.0 - q);
+        let heat = self.heat;
+        if self.fire {
+            Some(Shade {
+                depth: self.z,
+                color: [1.0, 0.5, 0.2],
+                alpha: self.fa * fall,
+                light: [heat * fall, heat * 0.45 * fall, heat * 0.1 * fall],
+            })
+        } else {
+            let grey = self.grey;
+            Some(Shade {
+                depth: self.z,
+                color: [grey, grey, grey * 1.05],
+                alpha: self.a0 * fall,
+                light: [0.0; 3],
+            })
+        }
+    }
+}
+
+/// A tree trunk from `(bx, by)` to `top`.
+#[derive(Clone, Copy, Debug)]
+pub struct Trunk {
+    pub(super) bx: f32,
+    pub(super) by: f32,
+    pub(super) top: (f32, f32),
+    pub(super) hw: f32,
+    pub(super) z: f32,
+}
+
+impl Trunk {
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let (d, _) = seg_dist(px, py, (self.bx, self.by), self.top);
+        let cov = clamp01(self.hw + 0.5 - d);
+        (cov > 0.0).then_some(Shade {
+            depth: self.z + 0.5,
+            color: [0.3, 0.2, 0.12],
+            alpha: 0.9 * cov,
+            light: [0.0; 3],
+        })
+    }
+}
+
+/// An alpha-edged elliptical leaf, tilted in depth.
+#[derive(Clone, Copy, Debug)]
+pub struct Leaf {
+    pub(super) cx: f32,
+    pub(super) cy: f32,
+    pub(super) ax: f32,
+    pub(super) ay: f32,
+    pub(super) la: f32,
+    pub(super) lb: f32,
+    pub(super) lz: f32,
+    pub(super) tx: f32,
+    pub(super) ty: f32,
+    pub(super) s: f32,
+    pub(super) col: [f32; 3],
+    pub(super) edge: f32,
+}
+
+impl Leaf {
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let (dx, dy) = (px - self.cx, py - self.cy);
+        let (ax, ay) = (self.ax, self.ay);
+        let (u, v) = ((dx * ax + dy * ay) / self.la, (dy * ax - dx * ay) / self.lb);
+        let q = (u * u + v * v).sqrt();
+        let alpha = 0.85 * clamp01((1.0 - q) * self.edge);
+        let s = self.s;
+        (alpha > 0.0).then_some(Shade {
+            depth: self.lz + self.tx * dx / s * 30.0 + self.ty * dy / s * 30.0,
+            color: self.col,
+            alpha,
+            light: [0.0; 3],
+        })
+    }
+}
+
+/// A band of lines of a sphere's front or back face.
+#[derive(Clone, Copy, Debug)]
+pub struct SphereBand {
+    pub(super) cx: f32,
+    pub(super) cy: f32,
+    pub(super) rad: f32,
+    pub(super) zc: f32,
+    pub(super) rw: f32,
+    pub(super) col: [f32; 3],
+    pub(super) a0: f32,
+    pub(super) front: bool,
+}
+
+impl SphereBand {
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let rad = self.rad;
+        let (dx, dy) = ((px - self.cx) / rad, (py - self.cy) / rad);
+        let q = dx * dx + dy * dy;
+        let dist = q.sqrt();
+        let cov = clamp01((1.0 - dist) * rad + 0.5);
+        if cov <= 0.0 {
+            return None;
+        }
+        // At the anti-aliased rim the faces would meet: keep them apart.
+        let h = (1.0 - q.min(1.0)).sqrt().max(0.05);
+        let q2 = q.min(1.0) * q.min(1.0);
+        let shade = if self.front { 1.0 } else { 0.7 };
+        let (zc, rw, a0) = (self.zc, self.rw, self.a0);
+        Some(Shade {
+            depth: if self.front { zc - rw * h } else { zc + rw * h },
+            color: self.col.map(|c| c * shade),
+            alpha: (a0 + (0.9 - a0) * q2) * cov,
+            light: [0.0; 3],
+        })
+    }
+}
+
+/// One face of a tinted glass panel.
+#[derive(Clone, Copy, Debug)]
+pub struct Panel {
+    pub(super) cx: f32,
+    pub(super) cy: f32,
+    pub(super) hx: f32,
+    pub(super) hy: f32,
+    pub(super) z: f32,
+    pub(super) sx: f32,
+    pub(super) sy: f32,
+    pub(super) thick: f32,
+    pub(super) tint: [f32; 3],
+    pub(super) alpha: f32,
+    pub(super) front: bool,
+}
+
+impl Panel {
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let (cx, cy, hx, hy) = (self.cx, self.cy, self.hx, self.hy);
+        let cov = clamp01(hx + 0.5 - (px - cx).abs()) * clamp01(hy + 0.5 - (py - cy).abs());
+        if cov <= 0.0 {
+            return None;
+        }
+        let zf = self.z + self.sx * (px - cx) + self.sy * (py - cy);
+        Some(Shade {
+            depth: if self.front { zf } else { zf + self.thick },
+            color: if self.front {
+                self.tint
+            } else {
+                self.tint.map(|c| c * 0.6)
+            },
+            alpha: self.alpha * cov,
+            light: [0.0; 3],
+        })
+    }
+}
+
+/// A faint fog slice.
+#[derive(Clone, Copy, Debug)]
+pub struct FogSlice {
+    pub(super) z: f32,
+    pub(super) c: (f32, f32),
+    pub(super) h: (f32, f32),
+    pub(super) peak: f32,
+    pub(super) puffs: [(f32, f32, f32); 3],
+    pub(super) base: [f32; 3],
+    pub(super) s: f32,
+    pub(super) amin: f32,
+}
+
+impl FogSlice {
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let (u, v) = ((px - self.c.0) / self.h.0, (py - self.c.1) / self.h.1);
+        let (u2, v2) = (u * u, v * v);
+        let q = u2 * u2 + v2 * v2;
+        if q >= 1.0 {
+            return None;
+        }
+        let mut puff = 0.0f32;
+        for &(x, y, rad) in &self.puffs {
+            let (dx, dy) = ((px - x) / rad, (py - y) / rad);
+            let d = 1.0 - (dx * dx + dy * dy);
+            if d > 0.0 {
+                puff += d * d;
+            }
+        }
+        let density = (1.0 - q) * (1.0 - q) * (0.5 + 0.5 * puff.min(1.0));
+        // Lower fog is a little darker (ground shadow), higher a little brighter.
+        let height = 0.9 + 0.2 * (1.0 - py / self.s);
+        Some(Shade {
+            depth: self.z,
+            color: self.base.map(|c| c * height),
+            alpha: self.amin + (self.peak - self.amin) * density,
+            light: [0.0; 3],
+        })
+    }
+}
+
+/// A Gaussian splat.
+#[derive(Clone, Copy, Debug)]
+pub struct Splat {
+    pub(super) sx: f32,
+    pub(super) sy: f32,
+    pub(super) ax: f32,
+    pub(super) ay: f32,
+    pub(super) sa: f32,
+    pub(super) sb: f32,
+    pub(super) opacity: f32,
+    pub(super) z: f32,
+    pub(super) color: [f32; 3],
+}
+
+impl Splat {
+    #[inline(always)]
+    pub(super) fn shade(&self, px: f32, py: f32) -> Option<Shade> {
+        let (dx, dy) = (px - self.sx, py - self.sy);
+        let (ax, ay) = (self.ax, self.ay);
+        let (u, v) = ((dx * ax + dy * ay) / self.sa, (dy * ax - dx * ay) / self.sb);
+        let alpha = (self.opacity * super::splat_falloff(u * u + v * v)).min(0.99);
+        (alpha >= 1.0 / 255.0).then_some(Shade {
+            depth: self.z,
+            color: self.color,
+            alpha,
+            light: [0.0; 3],
+        })
+    }
+}

@@ -1,0 +1,132 @@
+//! The span rasterizer: one scan per primitive kind (monomorphized over the kind's shade),
+//! over the primitive's box clipped to any rectangle, emitting 8-pixel spans aligned to
+//! multiples of 8 columns: a coverage mask and per-lane premultiplied color, alpha and depth,
+//! as [`mlab::lanes::FragmentLanes`] (what the kernel's span insert quantizes).
+
+use super::clamp01;
+use super::prims::{Kind, Primitive, Shade};
+use crate::stream::Frag;
+use mlab::lanes::{FragmentLanes, LANES};
+
+/// A clip rectangle in pixels: columns `x0..x1`, lines `y0..y1`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Clip {
+    /// First column.
+    pub x0: u32,
+    /// First line.
+    pub y0: u32,
+    /// One past the last column.
+    pub x1: u32,
+    /// One past the last line.
+    pub y1: u32,
+}
+
+impl Clip {
+    /// The whole frame.
+    pub fn frame(width: u32, height: u32) -> Clip {
+        Clip {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+}
+
+/// The lanes of one emitted span (lanes outside the mask hold stale values).
+pub type SpanLanes = FragmentLanes;
+
+/// Flattening spans back into fragments (the stream of the quality tables).
+pub trait PushFrags {
+    /// Append the lanes set in `mask` of the span at `(x, y)` as fragments, left to right.
+    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, out: &mut Vec<Frag>);
+}
+
+impl PushFrags for FragmentLanes {
+    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, out: &mut Vec<Frag>) {
+        for i in 0..LANES {
+            if mask & (1 << i) != 0 {
+                out.push(Frag {
+                    pixel: y * width + x + i as u32,
+                    depth: self.depth[i],
+                    color: [self.color[0][i], self.color[1][i], self.color[2][i]],
+                    alpha: self.alpha[i],
+                });
+            }
+        }
+    }
+}
+
+impl Primitive {
+    /// Rasterize over the box clipped to `clip`: `emit(x, y, mask, lanes)` per span that has
+    /// a fragment, `x` a multiple of 8, lines top to bottom, spans left to right. A fragment
+    /// that carries neither opacity nor light (both below 1/1024) is not emitted.
+    #[inline]
+    pub fn raster<E: FnMut(u32, u32, u8, &SpanLanes)>(&self, clip: Clip, emit: &mut E) {
+        let all = |_: f32| Some((f32::NEG_INFINITY, f32::INFINITY));
+        match &self.kind {
+            Kind::Strand(p) => self.scan(clip, |x, y| p.shade(x, y), |y| p.line_range(y), emit),
+            Kind::Sprite(p) => self.scan(clip, |x, y| p.shade(x, y), |y| p.line_range(y), emit),
+            Kind::Trunk(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
+            Kind::Leaf(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
+            Kind::SphereBand(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
+            Kind::Panel(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
+            Kind::FogSlice(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
+            Kind::Splat(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
+        }
+    }
+
+    #[inline(always)]
+    fn scan<S, R, E>(&self, clip: Clip, shade: S, range: R, emit: &mut E)
+    where
+        S: Fn(f32, f32) -> Option<Shade>,
+        R: Fn(f32) -> Option<(f32, f32)>,
+        E: FnMut(u32, u32, u8, &SpanLanes),
+    {
+        let (xa, xb) = (self.x0.max(clip.x0), self.x1.min(clip.x1));
+        let (ya, yb) = (self.y0.max(clip.y0), self.y1.min(clip.y1));
+        if xa >= xb || ya >= yb {
+            return;
+        }
+        let mut lanes = FragmentLanes {
+            color: [[0.0; LANES]; 3],
+            alpha: [0.0; LANES],
+            depth: [0.0; LANES],
+        };
+        for y in ya..yb {
+            let py = y as f32 + 0.5;
+            // The kind's conservative range on this line (pixel centres `x + 0.5`).
+            let Some((lo, hi)) = range(py) else { continue };
+            let xa = xa.max((lo - 0.5).floor().max(0.0).min(u32::MAX as f32) as u32);
+            let xb = xb.min((hi - 0.5).ceil().max(0.0).min(u32::MAX as f32 - 1.0) as u32 + 1);
+            let mut sx = xa & !(LANES as u32 - 1);
+            while sx < xb {
+                let mut mask = 0u8;
+                for i in 0..LANES {
+                    let x = sx + i as u32;
+                    if x < xa || x >= xb {
+                        continue;
+                    }
+                    let Some(sh) = shade(x as f32 + 0.5, py) else {
+                        continue;
+                    };
+                    let a = clamp01(sh.alpha);
+                    let c = [0, 1, 2].map(|k| (clamp01(sh.color[k]) * a + sh.light[k].max(0.0)).min(1.0));
+                    if a < 1.0 / 1024.0 && c.iter().all(|&v| v < 1.0 / 1024.0) {
+                        continue;
+                    }
+                    lanes.color[0][i] = c[0];
+                    lanes.color[1][i] = c[1];
+                    lanes.color[2][i] = c[2];
+                    lanes.alpha[i] = a;
+                    lanes.depth[i] = sh.depth;
+                    mask |= 1 << i;
+                }
+                if mask != 0 {
+                    emit(sx, y, mask, &lanes);
+                }
+                sx += LANES as u32;
+            }
+        }
+    }
+}
