@@ -97,8 +97,9 @@ impl Primitive {
             let py = y as f32 + 0.5;
             // The kind's conservative range on this line (pixel centres `x + 0.5`).
             let Some((lo, hi)) = range(py) else { continue };
-            let xa = xa.max((lo - 0.5).floor().max(0.0).min(u32::MAX as f32) as u32);
-            let xb = xb.min((hi - 0.5).ceil().max(0.0).min(u32::MAX as f32 - 1.0) as u32 + 1);
+            // Float-to-int casts saturate (infinities included); the sum saturates too.
+            let xa = xa.max((lo - 0.5).floor().max(0.0) as u32);
+            let xb = xb.min(((hi - 0.5).ceil().max(0.0) as u32).saturating_add(1));
             let mut sx = xa & !(LANES as u32 - 1);
             while sx < xb {
                 let mut mask = 0u8;
