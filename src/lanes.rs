@@ -55,11 +55,28 @@ use wide::{f32x8, f64x4, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
 /// Pixels per lane group.
 pub const LANES: usize = 8;
 
-/// The SIMD instruction set `wide` compiled the lanes for.
-pub const BACKEND: &str = if cfg!(target_feature = "avx2") {
+/// The SIMD instruction set `wide` compiled the lanes for, chosen at compile time:
+///
+/// - `"avx2 (avx512f build)"`: a build with `avx512f` (`x86-64-v4`). `wide` 1.7 keeps every
+///   8-wide type the lanes use in one 256-bit register and calls the AVX2 intrinsics of an
+///   `"avx2"` build (its only AVX-512 paths are shuffles, vector shifts and widening
+///   multiplies, none used here); LLVM may encode them with EVEX and mask registers.
+/// - `"avx2"`: one 256-bit register per 8-wide vector.
+/// - `"sse2"`: x86 without AVX2, two 128-bit halves (`wide` uses SSSE3, SSE4.1 or AVX where
+///   the build has them).
+/// - `"neon"`: two 128-bit NEON halves (aarch64).
+/// - `"simd128"`: two 128-bit halves (wasm32 with `simd128`).
+/// - `"portable"`: no SIMD, plain arrays (wasm32 without `simd128`, any other target).
+pub const BACKEND: &str = if cfg!(target_feature = "avx512f") {
+    "avx2 (avx512f build)"
+} else if cfg!(target_feature = "avx2") {
     "avx2"
 } else if cfg!(target_feature = "sse2") {
     "sse2"
+} else if cfg!(all(target_arch = "aarch64", target_feature = "neon")) {
+    "neon"
+} else if cfg!(all(target_family = "wasm", target_feature = "simd128")) {
+    "simd128"
 } else {
     "portable"
 };
