@@ -2,8 +2,9 @@
 //! rows read from bytes, masks), M in {1, 2, 3, 4, 8} and K in {1, 3, 7}, in both
 //! arithmetics (Paper and Unbiased). No tolerances.
 //!
-//! Set `MLAB_EXPECT_BACKEND=avx2` (or `sse2`) to make `backend_is_the_expected_one` fail
-//! when the build did not pick that backend (CI does, for both targets).
+//! Set `MLAB_EXPECT_BACKEND` to a `lanes::BACKEND` string (`sse2`, `avx2`, `neon`, ...) to make
+//! `backend_is_the_expected_one` fail when the build did not pick that backend (CI does, for
+//! every target it runs).
 
 #![allow(clippy::needless_range_loop)] // lane-indexed loops mirror the per-lane scalar calls
 
