@@ -58,9 +58,10 @@ pub const LANES: usize = 8;
 /// The SIMD instruction set `wide` compiled the lanes for, chosen at compile time:
 ///
 /// - `"avx2 (avx512f build)"`: a build with `avx512f` (`x86-64-v4`). `wide` 1.7 keeps every
-///   8-wide type the lanes use in one 256-bit register and calls the AVX2 intrinsics of an
-///   `"avx2"` build (its only AVX-512 paths are shuffles, vector shifts and widening
-///   multiplies, none used here); LLVM may encode them with EVEX and mask registers.
+///   256-bit type the lanes use in one `ymm` register and calls the AVX2 intrinsics of an
+///   `"avx2"` build: its only AVX-512 paths for these types are shuffles, per-lane variable
+///   shifts, widening multiplies and f64-to-integer conversions, none of which the lanes call.
+///   LLVM may still encode the code with EVEX and mask registers.
 /// - `"avx2"`: one 256-bit register per 8-wide vector.
 /// - `"sse2"`: x86 without AVX2, two 128-bit halves (`wide` uses SSSE3, SSE4.1 or AVX where
 ///   the build has them).
