@@ -15,11 +15,13 @@
 # installed here. Doc tests do not run cross; the benches are not built: `--cfg
 # mlab_no_bench_deps` drops criterion (Cargo.toml), a third of each build.
 #
-# Proptest cases (PROPTEST_CASES for every run, or per backend):
-#   v4 and simd128/portable: 1024, as the native runs.
-#   neon: 1024 too, but every crate built at opt-level 1 (CARGO_PROFILE_DEV_OPT_LEVEL=1; debug
-#   assertions and overflow checks stay on): unoptimized code under qemu took 12 minutes
-#   for what this runs in under one.
+# Proptest cases (PROPTEST_CASES overrides them all):
+#   v4: 1024, as the native runs of .ci/run.
+#   neon, simd128, portable: 256, to keep CI under 15 minutes (1024 cost about 40 s more each).
+#   neon builds every crate at opt-level 1 (CARGO_PROFILE_DEV_OPT_LEVEL=1; debug assertions and
+#   overflow checks stay on): unoptimized under qemu, 1024 cases took 12 minutes, 64 a minute.
+# A wasm test that panics aborts its binary (panic=abort), before libtest prints what it
+# captured: the wasm runs pass --nocapture so that the panic message shows.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 export CARGO_TERM_COLOR=never
@@ -28,7 +30,11 @@ export CARGO_PROFILE_DEV_DEBUG=line-tables-only
 NO_BENCH="--cfg mlab_no_bench_deps"
 
 step() { echo; echo "==== $* ($(date +%T))"; }
-took() { echo "---- $1: $(($SECONDS - $2)) s"; }
+# CPU seconds (user + system) of the finished children of this shell.
+cpu_s() { times | awk 'NR == 2 { t = 0; for (i = 1; i <= 2; i++) { split($i, a, "m"); t += a[1] * 60 + a[2] } printf "%d", t }'; }
+# took NAME START_SECONDS START_CPU: wall time and CPU time (on 2 cores, CPU / 2 is the wall
+# time of a busy step on an idle machine; wall well above that means other load).
+took() { echo "---- $1: $((SECONDS - $2)) s wall, $(($(cpu_s) - $3)) s CPU"; }
 
 need_target() {
   if ! rustup target list --installed | grep -qx "$1"; then
@@ -47,11 +53,14 @@ need_apt() { # need_apt COMMAND PACKAGE...
   fi
 }
 
-# kernel_tests NAME EXPECTED_BACKEND CASES [cargo args...]; the environment carries the rest.
+# kernel_tests NAME EXPECTED_BACKEND CASES [cargo args...]; the environment carries the rest,
+# HARNESS_ARGS extra arguments for the test binaries.
 kernel_tests() {
   local name="$1" want="$2" cases="$3"
   shift 3
-  MLAB_EXPECT_BACKEND="$want" PROPTEST_CASES="$cases" cargo test -p mlab --tests --lib "$@"
+  # shellcheck disable=SC2086
+  MLAB_EXPECT_BACKEND="$want" PROPTEST_CASES="$cases" cargo test -p mlab --tests --lib "$@" \
+    -- ${HARNESS_ARGS:-}
   # The same check once more, printed (the run above already failed on a wrong backend).
   MLAB_EXPECT_BACKEND="$want" cargo test -q -p mlab --test lanes backend_is_the_expected_one "$@" \
     -- --nocapture | grep "backend"
@@ -60,7 +69,8 @@ kernel_tests() {
 
 run_v4() {
   step "kernel tests, x86-64-v4: lanes on an AVX-512 build"
-  local t=$SECONDS
+  local t=$SECONDS c
+  c=$(cpu_s)
   if grep -qw avx512f /proc/cpuinfo; then
     echo "CPU has avx512f: running the x86-64-v4 build natively"
     CARGO_TARGET_DIR=target-v4 RUSTFLAGS="-C target-cpu=x86-64-v4 $NO_BENCH" \
@@ -68,21 +78,24 @@ run_v4() {
   else
     echo "SKIPPED x86-64-v4: this CPU has no avx512f in /proc/cpuinfo ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)); no emulator for it installs here"
   fi
-  took x86-64-v4 $t
+  took x86-64-v4 $t "$c"
 }
 
 run_neon() {
   step "kernel tests, aarch64 under qemu-aarch64: lanes on NEON"
-  local t=$SECONDS
+  local t=$SECONDS c
+  c=$(cpu_s)
   need_target aarch64-unknown-linux-gnu
   need_apt qemu-aarch64 qemu-user
   need_apt aarch64-linux-gnu-gcc gcc-aarch64-linux-gnu libc6-dev-arm64-cross
-  took "aarch64 install" $t
+  took "aarch64 install" $t "$c"
+  t=$SECONDS
+  c=$(cpu_s)
   CARGO_TARGET_DIR=target-aarch64 RUSTFLAGS="$NO_BENCH" CARGO_PROFILE_DEV_OPT_LEVEL=1 \
     CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc \
     CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch64-linux-gnu" \
-    kernel_tests aarch64 neon "${PROPTEST_CASES:-1024}" --target aarch64-unknown-linux-gnu
-  took aarch64 $t
+    kernel_tests aarch64 neon "${PROPTEST_CASES:-256}" --target aarch64-unknown-linux-gnu
+  took aarch64 $t "$c"
 }
 
 # wasm_tests NAME EXPECTED_BACKEND TARGET_DIR EXTRA_RUSTFLAGS
@@ -98,21 +111,23 @@ wasm_tests() {
   # (native test threads get 2 MiB); proptest's nested strategies overflow it unoptimized.
   CARGO_TARGET_DIR="$3" RUSTFLAGS="$NO_BENCH -C link-arg=-zstack-size=8388608 $4" \
     CARGO_TARGET_WASM32_WASIP1_RUNNER="node $node_flags $PWD/.ci/wasi-run.mjs" \
-    kernel_tests "$1" "$2" "${PROPTEST_CASES:-1024}" --target wasm32-wasip1
+    HARNESS_ARGS=--nocapture kernel_tests "$1" "$2" "${PROPTEST_CASES:-256}" --target wasm32-wasip1
 }
 
 run_simd128() {
   step "kernel tests, wasm32-wasip1 +simd128 under node:wasi: lanes on simd128"
-  local t=$SECONDS
+  local t=$SECONDS c
+  c=$(cpu_s)
   wasm_tests wasm32+simd128 simd128 target-wasm-simd128 "-C target-feature=+simd128"
-  took "wasm32 simd128" $t
+  took "wasm32 simd128" $t "$c"
 }
 
 run_portable() {
   step "kernel tests, wasm32-wasip1 without simd128 under node:wasi: lanes without SIMD"
-  local t=$SECONDS
+  local t=$SECONDS c
+  c=$(cpu_s)
   wasm_tests wasm32 portable target-wasm-portable ""
-  took "wasm32 portable" $t
+  took "wasm32 portable" $t "$c"
 }
 
 for b in "${@:-v4 neon simd128 portable}"; do
