@@ -30,11 +30,20 @@ export CARGO_PROFILE_DEV_DEBUG=line-tables-only
 NO_BENCH="--cfg mlab_no_bench_deps"
 
 step() { echo; echo "==== $* ($(date +%T))"; }
-# CPU seconds (user + system) of the finished children of this shell.
-cpu_s() { times | awk 'NR == 2 { t = 0; for (i = 1; i <= 2; i++) { split($i, a, "m"); t += a[1] * 60 + a[2] } printf "%d", t }'; }
+# CPU seconds (user + system) of the finished children of this shell, into CPU_S (no
+# subshell: a subshell would count its own children).
+TICKS=$(getconf CLK_TCK)
+cpu_s() {
+  local st
+  read -r -a st </proc/$$/stat
+  CPU_S=$(((st[15] + st[16]) / TICKS))
+}
 # took NAME START_SECONDS START_CPU: wall time and CPU time (on 2 cores, CPU / 2 is the wall
 # time of a busy step on an idle machine; wall well above that means other load).
-took() { echo "---- $1: $((SECONDS - $2)) s wall, $(($(cpu_s) - $3)) s CPU"; }
+took() {
+  cpu_s
+  echo "---- $1: $((SECONDS - $2)) s wall, $((CPU_S - $3)) s CPU"
+}
 
 need_target() {
   if ! rustup target list --installed | grep -qx "$1"; then
@@ -70,11 +79,14 @@ kernel_tests() {
 run_v4() {
   step "kernel tests, x86-64-v4: lanes on an AVX-512 build"
   local t=$SECONDS c
-  c=$(cpu_s)
+  cpu_s
+  c=$CPU_S
   if grep -qw avx512f /proc/cpuinfo; then
     echo "CPU has avx512f: running the x86-64-v4 build natively"
+    # --target: the build scripts stay generic x86-64 (RUSTFLAGS then reach only the target).
     CARGO_TARGET_DIR=target-v4 RUSTFLAGS="-C target-cpu=x86-64-v4 $NO_BENCH" \
-      kernel_tests x86-64-v4 "avx2 (avx512f build)" "${PROPTEST_CASES:-1024}"
+      kernel_tests x86-64-v4 "avx2 (avx512f build)" "${PROPTEST_CASES:-1024}" \
+      --target x86_64-unknown-linux-gnu
   else
     echo "SKIPPED x86-64-v4: this CPU has no avx512f in /proc/cpuinfo ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)); no emulator for it installs here"
   fi
@@ -84,13 +96,15 @@ run_v4() {
 run_neon() {
   step "kernel tests, aarch64 under qemu-aarch64: lanes on NEON"
   local t=$SECONDS c
-  c=$(cpu_s)
+  cpu_s
+  c=$CPU_S
   need_target aarch64-unknown-linux-gnu
   need_apt qemu-aarch64 qemu-user
   need_apt aarch64-linux-gnu-gcc gcc-aarch64-linux-gnu libc6-dev-arm64-cross
   took "aarch64 install" $t "$c"
   t=$SECONDS
-  c=$(cpu_s)
+  cpu_s
+  c=$CPU_S
   CARGO_TARGET_DIR=target-aarch64 RUSTFLAGS="$NO_BENCH" CARGO_PROFILE_DEV_OPT_LEVEL=1 \
     CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc \
     CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch64-linux-gnu" \
@@ -117,7 +131,8 @@ wasm_tests() {
 run_simd128() {
   step "kernel tests, wasm32-wasip1 +simd128 under node:wasi: lanes on simd128"
   local t=$SECONDS c
-  c=$(cpu_s)
+  cpu_s
+  c=$CPU_S
   wasm_tests wasm32+simd128 simd128 target-wasm-simd128 "-C target-feature=+simd128"
   took "wasm32 simd128" $t "$c"
 }
@@ -125,7 +140,8 @@ run_simd128() {
 run_portable() {
   step "kernel tests, wasm32-wasip1 without simd128 under node:wasi: lanes without SIMD"
   local t=$SECONDS c
-  c=$(cpu_s)
+  cpu_s
+  c=$CPU_S
   wasm_tests wasm32 portable target-wasm-portable ""
   took "wasm32 portable" $t "$c"
 }
