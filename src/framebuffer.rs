@@ -166,17 +166,20 @@ impl Dims {
     }
 
     /// Check a span operation at `(x, y)` with `mask`: every lane that is on lies inside.
-    /// Returns the pixel index of lane 0 (which may itself be off and outside).
+    /// Returns the pixel index of lane 0 (off, but inside the line, when lanes past it are
+    /// on); 0 for a zero mask, which touches no pixel and may lie anywhere on a valid line
+    /// (its `y * width + x` can exceed a 32-bit `usize`).
     #[inline(always)]
     pub(crate) fn check_span(self, x: u32, y: u32, mask: u8) -> Result<usize, FramebufferError> {
         if y >= self.height {
             return Err(self.out_of_bounds(x, y));
         }
-        if mask != 0 {
-            let last = x as u64 + 7 - mask.leading_zeros() as u64;
-            if last >= self.width as u64 {
-                return Err(self.out_of_bounds(last.min(u32::MAX as u64) as u32, y));
-            }
+        if mask == 0 {
+            return Ok(0);
+        }
+        let last = x as u64 + 7 - mask.leading_zeros() as u64;
+        if last >= self.width as u64 {
+            return Err(self.out_of_bounds(last.min(u32::MAX as u64) as u32, y));
         }
         Ok(y as usize * self.width as usize + x as usize)
     }
