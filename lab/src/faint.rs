@@ -156,6 +156,7 @@ pub fn tail_table(rows: &[(String, u64, TailStats)], k: usize) -> String {
         let pct = 100.0 * t.paper_saturated as f64 / t.depth.covered.max(1) as f64;
         s += &format!(" {} px ({pct:.1} %) |\n", t.paper_saturated);
     }
+    s += &format!("\n{}\n", crate::report::HT_NOTE);
     s
 }
 
@@ -366,6 +367,7 @@ pub fn full_table(runs: &[SceneRun]) -> String {
             );
         }
     }
+    s += &format!("\n{}\n", crate::report::HT_NOTE);
     s
 }
 
@@ -407,5 +409,6 @@ pub fn headline_table(runs: &[SceneRun]) -> String {
         }
         s += "\n";
     }
+    s += &format!("\n{}\n", crate::report::HT_NOTE);
     s
 }

@@ -5,8 +5,9 @@
 //!   rasterizers; the fragment streams in submission order ([`stream`]) come from them.
 //! - [`methods`]: the exact A-buffer reference and every method as a compositor over the
 //!   same stream (MLAB and HT from the `mlab` kernel).
-//! - [`metrics`]: RMSE, PSNR, max error, FLIP, background visibility bias; PSNR and
-//!   visibility bias over covered pixels.
+//! - [`metrics`]: RMSE, PSNR, max error, FLIP (error maps with nv-flip's color map), SSIM,
+//!   background visibility bias, the change between two submission orders; each over the
+//!   whole image and over the covered pixels.
 //! - [`faint`]: `oit-lab faint` (issue 9): many faint or dense layers, both kernel
 //!   arithmetics, HT tail sums and saturation.
 //! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.

@@ -190,3 +190,294 @@ fn high_pass_rms(reference: &Image, test: &Image, covered: &[bool]) -> f64 {
     }
     if n > 0 { (sum / n as f64).sqrt() } else { 0.0 }
 }
+
+/// Mean of `values` over the entries where `mask` is true (0 when none is).
+pub fn mean_where<T: Copy + Into<f64>>(values: &[T], mask: &[bool]) -> f64 {
+    assert_eq!(values.len(), mask.len());
+    let (mut s, mut n) = (0.0f64, 0usize);
+    for (v, _) in values.iter().zip(mask).filter(|(_, m)| **m) {
+        s += (*v).into();
+        n += 1;
+    }
+    if n > 0 { s / n as f64 } else { 0.0 }
+}
+
+/// The per-pixel FLIP error map of `test` against `reference` (nv-flip, LDR, both images
+/// sRGB-encoded to 8 bits, 67 pixels per degree): one value in `[0, 1]` per pixel.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlipMap {
+    /// Width.
+    pub width: u32,
+    /// Height.
+    pub height: u32,
+    /// Error per pixel, row major.
+    pub values: Vec<f32>,
+}
+
+impl FlipMap {
+    /// FLIP of `test` against `reference` (same size).
+    pub fn new(reference: &Image, test: &Image) -> FlipMap {
+        assert_eq!((reference.width, reference.height), (test.width, test.height));
+        let r = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &to_srgb8(reference));
+        let t = nv_flip::FlipImageRgb8::with_data(test.width, test.height, &to_srgb8(test));
+        let err = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+        FlipMap {
+            width: reference.width,
+            height: reference.height,
+            values: err.to_vec(),
+        }
+    }
+
+    /// Mean over every pixel.
+    pub fn mean(&self) -> f64 {
+        mean_where(&self.values, &vec![true; self.values.len()])
+    }
+
+    /// Mean over the pixels where `mask` is true (the covered pixels): 0 when none is.
+    pub fn mean_where(&self, mask: &[bool]) -> f64 {
+        mean_where(&self.values, mask)
+    }
+
+    /// The map through nv-flip's own color map (`magma_lut`, what the FLIP tool writes):
+    /// RGB bytes, row major.
+    pub fn magma(&self) -> Vec<u8> {
+        let map = nv_flip::FlipImageFloat::with_data(self.width, self.height, &self.values);
+        map.apply_color_lut(&nv_flip::magma_lut()).to_vec()
+    }
+}
+
+/// SSIM constants of Wang, Bovik, Sheikh & Simoncelli, "Image quality assessment: from error
+/// visibility to structural similarity", IEEE Trans. Image Processing 13(4), 600-612, 2004,
+/// section III-C: `K1 = 0.01`, `K2 = 0.03`, dynamic range `L = 1` (display values in [0, 1]),
+/// an 11x11 circular-symmetric Gaussian window of standard deviation 1.5 normalized to sum 1.
+pub const SSIM_K1: f64 = 0.01;
+/// See [`SSIM_K1`].
+pub const SSIM_K2: f64 = 0.03;
+/// Gaussian window radius (11 taps) and standard deviation; see [`SSIM_K1`].
+pub const SSIM_RADIUS: usize = 5;
+/// See [`SSIM_RADIUS`].
+pub const SSIM_SIGMA: f64 = 1.5;
+
+/// sRGB encoding of a linear value clamped to `[0, 1]`, not quantized.
+fn srgb_encode(x: f32) -> f64 {
+    let x = display(x);
+    if x <= 0.003_130_8 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The SSIM window's 1D weights (the 2D window is their outer product), normalized to sum 1.
+fn ssim_kernel() -> [f64; 2 * SSIM_RADIUS + 1] {
+    let mut k = [0.0f64; 2 * SSIM_RADIUS + 1];
+    for (i, v) in k.iter_mut().enumerate() {
+        let d = i as f64 - SSIM_RADIUS as f64;
+        *v = (-d * d / (2.0 * SSIM_SIGMA * SSIM_SIGMA)).exp();
+    }
+    let sum: f64 = k.iter().sum();
+    k.map(|v| v / sum)
+}
+
+/// The Gaussian-weighted local mean of a `w x h` plane: separable, the window cut to the image
+/// and renormalized near the border (the cut 2D window is the product of the two cut 1D ones).
+fn ssim_blur(src: &[f64], w: usize, h: usize) -> Vec<f64> {
+    let k = ssim_kernel();
+    let r = SSIM_RADIUS;
+    // Renormalized weights for the cut window at position `i` of `n`.
+    let cut = |i: usize, n: usize| -> (usize, usize, f64) {
+        let (lo, hi) = (i.saturating_sub(r), (i + r + 1).min(n));
+        let sum: f64 = (lo..hi).map(|j| k[j + r - i]).sum();
+        (lo, hi, sum)
+    };
+    let mut tmp = vec![0.0f64; w * h];
+    for y in 0..h {
+        let row = &src[y * w..(y + 1) * w];
+        let out = &mut tmp[y * w..(y + 1) * w];
+        for x in 0..w {
+            if x >= r && x + r < w {
+                let win = &row[x - r..=x + r];
+                out[x] = win.iter().zip(&k).map(|(a, b)| a * b).sum();
+            } else {
+                let (lo, hi, sum) = cut(x, w);
+                out[x] = (lo..hi).map(|j| k[j + r - x] * row[j]).sum::<f64>() / sum;
+            }
+        }
+    }
+    let mut out = vec![0.0f64; w * h];
+    for y in 0..h {
+        let (lo, hi, sum) = cut(y, h);
+        let o = &mut out[y * w..(y + 1) * w];
+        for j in lo..hi {
+            let kj = k[j + r - y] / sum;
+            for (a, b) in o.iter_mut().zip(&tmp[j * w..(j + 1) * w]) {
+                *a += kj * b;
+            }
+        }
+    }
+    out
+}
+
+/// The reference's side of SSIM (its encoded channels and their local means), computed once
+/// and compared with many test images ([`SsimReference::map`]).
+#[derive(Clone, Debug)]
+pub struct SsimReference {
+    width: u32,
+    height: u32,
+    /// Per channel: encoded values, local mean, local mean of squares.
+    planes: Vec<[Vec<f64>; 3]>,
+}
+
+impl SsimReference {
+    /// Prepare `reference`.
+    pub fn new(reference: &Image) -> SsimReference {
+        let (w, h) = (reference.width as usize, reference.height as usize);
+        let planes = (0..3)
+            .map(|k| {
+                let x: Vec<f64> = reference.rgb.iter().map(|p| srgb_encode(p[k])).collect();
+                let xx: Vec<f64> = x.iter().map(|v| v * v).collect();
+                let (mx, mxx) = (ssim_blur(&x, w, h), ssim_blur(&xx, w, h));
+                [x, mx, mxx]
+            })
+            .collect();
+        SsimReference {
+            width: reference.width,
+            height: reference.height,
+            planes,
+        }
+    }
+
+    /// The SSIM map of `test` against the prepared reference; see [`ssim_map`].
+    pub fn map(&self, test: &Image) -> Vec<f64> {
+        assert_eq!((self.width, self.height), (test.width, test.height));
+        let (w, h) = (self.width as usize, self.height as usize);
+        let n = w * h;
+        let (c1, c2) = ((SSIM_K1 * 1.0).powi(2), (SSIM_K2 * 1.0).powi(2));
+        let mut map = vec![0.0f64; n];
+        for (k, [x, mx, mxx]) in self.planes.iter().enumerate() {
+            let y: Vec<f64> = test.rgb.iter().map(|p| srgb_encode(p[k])).collect();
+            let yy: Vec<f64> = y.iter().map(|v| v * v).collect();
+            let xy: Vec<f64> = x.iter().zip(&y).map(|(a, b)| a * b).collect();
+            let (my, myy, mxy) = (ssim_blur(&y, w, h), ssim_blur(&yy, w, h), ssim_blur(&xy, w, h));
+            for p in 0..n {
+                // Weighted variances as E[x^2] - mu^2 (the sums of Eq. 15), not below 0.
+                let vx = (mxx[p] - mx[p] * mx[p]).max(0.0);
+                let vy = (myy[p] - my[p] * my[p]).max(0.0);
+                let cxy = mxy[p] - mx[p] * my[p];
+                let s = (2.0 * mx[p] * my[p] + c1) * (2.0 * cxy + c2)
+                    / ((mx[p] * mx[p] + my[p] * my[p] + c1) * (vx + vy + c2));
+                map[p] += s / 3.0;
+            }
+        }
+        map
+    }
+}
+
+/// The per-pixel SSIM of `test` against `reference` (same size), mean of the three channels,
+/// each channel on the sRGB-encoded display values (what SSIM was designed on: gamma-encoded
+/// pixel values), with the constants of [`SSIM_K1`]. At each pixel, with the Gaussian window
+/// `w` centred there, `mu = sum w x`, `sigma^2 = sum w (x - mu)^2`, `sigma_xy = sum w (x - mu_x)
+/// (y - mu_y)` and `SSIM = (2 mu_x mu_y + C1)(2 sigma_xy + C2) / ((mu_x^2 + mu_y^2 + C1)
+/// (sigma_x^2 + sigma_y^2 + C2))`, `C1 = (K1 L)^2`, `C2 = (K2 L)^2` (Eq. 13 with the weighted
+/// statistics of Eq. 14-16). Near the border the window is cut to the image and renormalized
+/// (Wang et al. drop the border instead; a map needs a value at every pixel, so that it can be
+/// averaged over the covered ones). 1 for identical images.
+pub fn ssim_map(reference: &Image, test: &Image) -> Vec<f64> {
+    SsimReference::new(reference).map(test)
+}
+
+/// Every metric of one image against the reference: whole image and covered pixels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scores {
+    /// Whole-image metrics ([`compare`]); its `flip` is the mean of [`Scores::flip_map`].
+    pub whole: Quality,
+    /// Metrics over the covered pixels ([`compare_covered`]).
+    pub covered: Covered,
+    /// Mean FLIP over the covered pixels, when FLIP was computed.
+    pub flip_covered: Option<f64>,
+    /// Mean SSIM over every pixel ([`ssim_map`]).
+    pub ssim: f64,
+    /// Mean SSIM over the covered pixels.
+    pub ssim_covered: f64,
+    /// The FLIP error map, when computed.
+    pub flip_map: Option<FlipMap>,
+}
+
+/// [`Scores`] of `test` against `reference`, covered pixels where `covered` is true.
+pub fn score(reference: &Image, test: &Image, covered: &[bool], with_flip: bool) -> Scores {
+    Scorer::new(reference, covered).score(test, with_flip)
+}
+
+/// A reference prepared for [`Scores`] of many test images.
+pub struct Scorer<'a> {
+    reference: &'a Image,
+    covered: &'a [bool],
+    ssim: SsimReference,
+}
+
+impl<'a> Scorer<'a> {
+    /// Prepare `reference`, covered pixels where `covered` is true.
+    pub fn new(reference: &'a Image, covered: &'a [bool]) -> Scorer<'a> {
+        Scorer {
+            reference,
+            covered,
+            ssim: SsimReference::new(reference),
+        }
+    }
+
+    /// [`Scores`] of `test`.
+    pub fn score(&self, test: &Image, with_flip: bool) -> Scores {
+        score_prepared(self.reference, &self.ssim, test, self.covered, with_flip)
+    }
+}
+
+fn score_prepared(reference: &Image, sref: &SsimReference, test: &Image, covered: &[bool], with_flip: bool) -> Scores {
+    let mut whole = compare(reference, test, false);
+    let flip_map = with_flip.then(|| FlipMap::new(reference, test));
+    whole.flip = flip_map.as_ref().map(FlipMap::mean);
+    let ssim = sref.map(test);
+    Scores {
+        whole,
+        covered: compare_covered(reference, test, covered),
+        flip_covered: flip_map.as_ref().map(|m| m.mean_where(covered)),
+        ssim: mean_where(&ssim, &vec![true; ssim.len()]),
+        ssim_covered: mean_where(&ssim, covered),
+        flip_map,
+    }
+}
+
+/// How much an image changes between two submission orders of the same primitives.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Change {
+    /// Share of the covered pixels (in `[0, 1]`) where a displayed 8-bit sRGB channel differs
+    /// by more than [`CHANGE_LEVELS`] levels.
+    pub share: f64,
+    /// Largest change of a displayed 8-bit sRGB channel, in levels (0-255).
+    pub max_levels: u8,
+    /// Mean FLIP of one image against the other over the covered pixels, when computed.
+    pub flip: Option<f64>,
+}
+
+/// A displayed channel "changes" when its 8-bit sRGB value moves by more than this (2/255).
+pub const CHANGE_LEVELS: u8 = 2;
+
+/// [`Change`] between `a` and `b` (same size) over the pixels where `covered` is true.
+pub fn change(a: &Image, b: &Image, covered: &[bool], with_flip: bool) -> Change {
+    assert_eq!((a.width, a.height), (b.width, b.height));
+    assert_eq!(covered.len(), a.rgb.len());
+    let (mut n, mut moved, mut max_levels) = (0usize, 0usize, 0u8);
+    for p in (0..covered.len()).filter(|&p| covered[p]) {
+        n += 1;
+        let d = (0..3)
+            .map(|k| srgb8(a.rgb[p][k]).abs_diff(srgb8(b.rgb[p][k])))
+            .max()
+            .unwrap_or(0);
+        max_levels = max_levels.max(d);
+        moved += usize::from(d > CHANGE_LEVELS);
+    }
+    Change {
+        share: if n > 0 { moved as f64 / n as f64 } else { 0.0 },
+        max_levels,
+        flip: with_flip.then(|| FlipMap::new(a, b).mean_where(covered)),
+    }
+}

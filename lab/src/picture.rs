@@ -1,7 +1,6 @@
 //! PNG output: single images, difference images and the Figure 3 grid.
 
 use crate::methods::Image;
-use crate::metrics::srgb8;
 use std::path::Path;
 
 /// An 8-bit RGB picture.
@@ -34,11 +33,14 @@ impl Picture {
         }
     }
 
-    /// `|test - reference|` per channel on the display values, times `gain`, sRGB-encoded.
+    /// The difference image gained in linear light: per channel `|test - reference|` on the
+    /// display values (linear, clamped to `[0, 1]`), times `gain`, written to the byte as it
+    /// is (`round(255 min(1, gain d))`, no sRGB encoding, which would lift small differences:
+    /// an 8-bit quantization step of 1/255 gained 4x is 4/255 here, 33/255 sRGB-encoded).
     pub fn difference(reference: &Image, test: &Image, gain: f32) -> Picture {
         let d = |a: f32, b: f32| {
             let c = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
-            srgb8((c(a) - c(b)).abs() * gain)
+            ((c(a) - c(b)).abs() * gain * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
         };
         let data = reference
             .rgb

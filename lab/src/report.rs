@@ -1,10 +1,21 @@
 //! The evaluation of one stream: the reference, every method, their metrics and timings,
 //! and the Markdown tables.
 
+use crate::faint::{Depth, depth};
 use crate::methods::{Frame, Image, Method};
-use crate::metrics::{Quality, compare};
+use crate::metrics::{Scorer, Scores, score};
 use crate::stream::Stream;
 use std::time::Instant;
+
+/// How the tables name HT, said once under every table that has an HT row: the lab's
+/// `HT K` has `K` head rows plus the tail, which the paper (section 5) calls HT `K + 1`.
+pub const HT_NOTE: &str = "HT naming: the lab's `HT K` = K head rows + the tail = the paper's HT K+1 \
+                           (8 (K+1) B/px): HT 0, 1, 3, 7 here are the paper's HT 1, 2, 4, 8.";
+
+/// Every covered-pixel column is over the pixels where the reference has at least one
+/// fragment; said under the tables.
+pub const COVERED_NOTE: &str = "covered: over the pixels with at least one fragment (the rest \
+                                show the background in every method); whole: every pixel.";
 
 /// One method's result on one stream.
 pub struct Entry {
@@ -12,8 +23,8 @@ pub struct Entry {
     pub method: Method,
     /// Its image.
     pub image: Image,
-    /// Metrics against the reference.
-    pub quality: Quality,
+    /// Metrics against the reference (whole image and covered pixels).
+    pub scores: Scores,
     /// Memory per pixel in bytes.
     pub bytes: f64,
     /// Milliseconds to composite the frame (the A-buffer's includes its sort).
@@ -30,6 +41,10 @@ pub struct Evaluation {
     pub max_depth: usize,
     /// Fragment count per pixel.
     pub counts: Vec<u32>,
+    /// Fragments per covered pixel (mean, max).
+    pub depth: Depth,
+    /// Covered pixels (the reference has at least one fragment there).
+    pub covered: Vec<bool>,
     /// The reference entry (metrics against itself: all zero).
     pub reference: Entry,
     /// The methods, in the order asked.
@@ -52,12 +67,13 @@ pub fn evaluate(
     let t = Instant::now();
     let image = Method::Reference.render(&frame)?;
     let ms = (t.elapsed().as_secs_f64() + frame.sort_seconds) * 1e3;
-    let quality = compare(&image, &image, false);
+    let covered: Vec<bool> = frame.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
+    let scores = score(&image, &image, &covered, false);
     let reference = Entry {
         method: Method::Reference,
         bytes: Method::Reference.bytes_per_pixel(&frame),
         image,
-        quality,
+        scores,
         ms,
     };
     tick("A-buffer");
@@ -74,11 +90,12 @@ pub fn evaluate(
     let queue = std::sync::Mutex::new((0..rendered.len()).rev().collect::<Vec<_>>());
     let results = std::sync::Mutex::new(vec![None; rendered.len()]);
     let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
+    let scorer = Scorer::new(&reference.image, &covered);
     std::thread::scope(|s| {
         for _ in 0..threads {
             s.spawn(|| {
                 while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                    let q = compare(&reference.image, &rendered[i].1, with_flip);
+                    let q = scorer.score(&rendered[i].1, with_flip);
                     if let Ok(mut r) = results.lock() {
                         r[i] = Some(q);
                     }
@@ -89,12 +106,12 @@ pub fn evaluate(
     let results = results.into_inner().map_err(|_| "metrics thread failed".to_string())?;
     let mut entries = Vec::with_capacity(methods.len());
     for ((m, image, ms), q) in rendered.into_iter().zip(results) {
-        let quality = q.ok_or("metrics thread failed")?;
+        let scores = q.ok_or("metrics thread failed")?;
         entries.push(Entry {
             method: m,
             bytes: m.bytes_per_pixel(&frame),
             image,
-            quality,
+            scores,
             ms,
         });
     }
@@ -103,6 +120,8 @@ pub fn evaluate(
         fragments: stream.frags.len(),
         max_depth: frame.bins.max_depth_complexity(),
         counts: frame.bins.start.windows(2).map(|w| w[1] - w[0]).collect(),
+        depth: depth(&frame),
+        covered,
         reference,
         entries,
     })
@@ -116,50 +135,62 @@ fn num(x: f64, digits: usize) -> String {
     }
 }
 
-/// The full Markdown table: one row per scene and method.
+/// The full Markdown table: one row per scene and method, covered-pixel metrics beside the
+/// whole-image ones, then the notes ([`COVERED_NOTE`], [`HT_NOTE`]).
 pub fn full_table(evals: &[Evaluation]) -> String {
     let mut s = String::from(
-        "| scene | method | B/px | ms | RMSE | PSNR dB | max err | mean FLIP | signed err | vis bias |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        "| scene | method | B/px | ms | PSNR covered dB | PSNR whole dB | FLIP covered | FLIP whole | SSIM covered | SSIM whole | max err | signed err | vis bias mean (covered) | vis bias max (covered) |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for e in evals {
         let r = &e.reference;
         s += &format!(
-            "| {} | {} ({} frags, max {}/px) | {:.1} | {:.1} | 0 | inf | 0 | 0 | 0 | 0 |\n",
+            "| {} | {} ({} frags, {:.1} per covered px, max {}) | {:.1} | {:.1} | inf | inf | 0 | 0 | 1 | 1 | 0 | 0 | 0 | 0 |\n",
             e.name,
             r.method.name(),
             e.fragments,
+            e.depth.mean,
             e.max_depth,
             r.bytes,
             r.ms
         );
         for x in &e.entries {
-            let q = &x.quality;
+            let q = &x.scores;
+            let f = |v: Option<f64>| v.map_or("-".into(), |f| format!("{f:.4}"));
             s += &format!(
-                "| {} | {} | {:.0} | {:.1} | {:.4} | {} | {:.3} | {} | {:+.4} | {:+.4} |\n",
+                "| {} | {} | {:.0} | {:.1} | {} | {} | {} | {} | {:.4} | {:.4} | {:.3} | {:+.4} | {:+.4} | {:+.4} |\n",
                 e.name,
                 x.method.name(),
                 x.bytes,
                 x.ms,
-                q.rmse,
-                num(q.psnr, 1),
-                q.max_abs,
-                q.flip.map_or("-".into(), |f| format!("{f:.4}")),
-                q.mean_signed,
-                q.vis_bias
+                num(q.covered.psnr, 1),
+                num(q.whole.psnr, 1),
+                f(q.flip_covered),
+                f(q.whole.flip),
+                q.ssim_covered,
+                q.ssim,
+                q.whole.max_abs,
+                q.whole.mean_signed,
+                q.covered.vis_bias,
+                q.covered.vis_worst
             );
         }
     }
+    s += &format!(
+        "\n{COVERED_NOTE} vis bias: method minus exact background visibility, mean and the pixel of largest magnitude (signed). {HT_NOTE}\n"
+    );
     s
 }
 
-/// The summary: one row per method, PSNR / mean FLIP per scene.
+/// The summary: one row per method, PSNR on covered pixels / mean FLIP on covered pixels
+/// per scene, then the notes.
 pub fn summary_table(evals: &[Evaluation]) -> String {
     let Some(first) = evals.first() else {
         return String::new();
     };
     let mut s = String::from("| method | B/px |");
     for e in evals {
-        s += &format!(" {} PSNR / FLIP |", e.name);
+        s += &format!(" {} PSNR / FLIP (covered) |", e.name);
     }
     s += "\n|---|---:|";
     s += &"---:|".repeat(evals.len());
@@ -169,14 +200,15 @@ pub fn summary_table(evals: &[Evaluation]) -> String {
         for e in evals {
             match e.entries.get(i) {
                 Some(y) => {
-                    let f = y.quality.flip.map_or("-".into(), |f| format!("{f:.3}"));
-                    s += &format!(" {} / {} |", num(y.quality.psnr, 1), f);
+                    let f = y.scores.flip_covered.map_or("-".into(), |f| format!("{f:.3}"));
+                    s += &format!(" {} / {} |", num(y.scores.covered.psnr, 1), f);
                 }
                 None => s += " - |",
             }
         }
         s += "\n";
     }
+    s += &format!("\n{COVERED_NOTE} {HT_NOTE}\n");
     s
 }
 

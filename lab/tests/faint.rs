@@ -302,10 +302,12 @@ fn report_has_every_scene_and_method() {
         runs.push(run_stream(sc, seed, &s, &methods, false).unwrap());
     }
     let full = oit_lab::faint::full_table(&runs);
-    assert_eq!(full.lines().count(), 2 + 2 * methods.len());
+    // Header, separator, one row per method and scene, a blank line and the HT naming note.
+    assert_eq!(full.lines().count(), 2 + 2 * methods.len() + 2);
+    assert!(full.contains("the paper's HT K+1"));
     assert!(full.contains("| MLAB 4 unbiased | 32 |") && full.contains("| HT 3 paper | 32 |"));
     let head = oit_lab::faint::headline_table(&runs);
-    assert_eq!(head.lines().count(), 2 + 2);
+    assert_eq!(head.lines().count(), 2 + 2 + 2);
     assert!(head.starts_with("| scene | frags / covered px (mean; max) | OVER unsorted | MLAB 4 paper |"));
     // Two seeds of GLASS give a spread, one of SPLATS a single value.
     let glass = head.lines().find(|l| l.starts_with("| GLASS")).unwrap();
