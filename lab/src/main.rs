@@ -22,6 +22,8 @@ USAGE:
                                             write a scene's fragment stream as a dump
     oit-lab bench [OPTIONS]                 frame-level timings on every core (docs/frame.md)
     oit-lab faint [OPTIONS]                 issue 9: faint and dense layers, both arithmetics
+    oit-lab scenes [OPTIONS]                fragments per scene and per covered pixel (default
+                                            1280x720, against the paper's Table 1)
     oit-lab help | --help | -h              this text; `oit-lab COMMAND --help` for a command
 
 The main job writes OUT/figure.png (Figure 3 grid), OUT/figure-small.png, one PNG per image
@@ -110,6 +112,23 @@ OPTIONS:
     -h, --help        this text
 ";
 
+const SCENES_HELP: &str = "\
+oit-lab scenes: how deep each scene is: fragments in the frame, covered pixels, mean, 99th
+percentile and max fragments per covered pixel, the paper's Table 1 count (1280x720), and the
+share of covered pixels whose exact image exceeds 1 (clipped by a display and by the metrics)
+
+USAGE:
+    oit-lab scenes [OPTIONS]
+
+OPTIONS:
+    --size WxH        frame size (default 1280x720, the paper's)
+    --seed N          scene seed (default 1)
+    --scenes A,B,...  these scenes (default the main five; FOG and SPLATS have tens of
+                      millions of fragments at 640x360 already)
+    --no-clip         skip the clipped share (it renders the exact image)
+    -h, --help        this text
+";
+
 const DUMP_HELP: &str = "\
 oit-lab dump: write a scene's fragment stream as a dump file
 
@@ -188,7 +207,8 @@ fn parse_seed(a: &mut Args) -> Result<u64, Fail> {
 fn main() -> ExitCode {
     let mut rest: Vec<String> = std::env::args().skip(1).collect();
     let cmd = match rest.first().map(String::as_str) {
-        Some("run") | Some("evaluate") | Some("dump") | Some("bench") | Some("faint") | Some("help") => rest.remove(0),
+        Some("run") | Some("evaluate") | Some("dump") | Some("bench") | Some("faint") | Some("scenes")
+        | Some("help") => rest.remove(0),
         _ => "run".to_string(),
     };
     let mut args = Args { rest };
@@ -217,6 +237,11 @@ fn main() -> ExitCode {
             print!("{FAINT_HELP}");
             Ok(())
         }
+        "scenes" if args.flag(&["-h", "--help"]) => {
+            print!("{SCENES_HELP}");
+            Ok(())
+        }
+        "scenes" => cmd_scenes(args),
         "bench" => cmd_bench(args),
         "faint" => cmd_faint(args),
         "evaluate" => cmd_evaluate(args),
@@ -603,6 +628,23 @@ fn cmd_faint(mut a: Args) -> Result<(), Fail> {
         oit_lab::faint::headline_table(&runs)
     );
     println!("## Every method\n\n{}", oit_lab::faint::full_table(&runs));
+    Ok(())
+}
+
+fn cmd_scenes(mut a: Args) -> Result<(), Fail> {
+    let (w, h) = match a.value("--size")? {
+        Some(s) => parse_size(&s)?,
+        None => (1280, 720),
+    };
+    let seed = parse_seed(&mut a)?;
+    let scenes = parse_scenes(&mut a, &Scene::MAIN)?;
+    let clip = !a.flag(&["--no-clip"]);
+    a.finish()?;
+    println!("# Scene depth: {w}x{h}, seed {seed}\n");
+    print!(
+        "{}",
+        oit_lab::scenes::stats::table(&scenes, w, h, seed, clip).map_err(runtime)?
+    );
     Ok(())
 }
 

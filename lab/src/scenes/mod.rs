@@ -17,6 +17,7 @@
 mod build;
 mod prims;
 mod raster;
+pub mod stats;
 
 pub use build::splat_falloff;
 pub use prims::{Kind, Primitive, Primitives};
