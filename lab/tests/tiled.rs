@@ -166,8 +166,11 @@ fn abuffer_is_close_to_the_exact_reference() {
         .flat_map(|(a, b)| (0..3).map(move |k| a[k].abs_diff(b[k])))
         .max()
         .unwrap();
-    // Only the 8-bit quantization of each fragment differs.
-    assert!(worst <= 3, "largest channel difference {worst}");
+    // Only the 8-bit quantization of each fragment differs (the plain 8-bit A-buffer equals
+    // the tiled one exactly: `baselines_equal_their_plain_versions`). Its errors add up over
+    // a pixel's fragments: since HAIR has the paper's depth (issue 10), the worst pixel holds
+    // 76 faint fragments whose transmittances sum to 12.4 and is off by 4 levels (3 before).
+    assert!(worst <= 4, "largest channel difference {worst}");
 }
 
 #[test]

@@ -29,11 +29,14 @@ use build::Builder;
 /// The scenes. The discriminants seed each scene's generator: new scenes go at the end.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Scene {
-    /// Thousands of thin strands, drawn strand by strand, root to tip.
+    /// A ponytail seen from behind: thousands of thin strands combed to a tie (hundreds over
+    /// its densest pixels), drawn strand by strand, root to tip.
     Hair,
-    /// Soft smoke and fire sprites, low alpha, some additive, unsorted.
+    /// Soft smoke and fire sprites, low alpha, some additive, unsorted; the smoke is shaded by
+    /// the light the sprites between it and a light leave (a volumetric shadow).
     Particles,
-    /// Trees of alpha-edged leaves, tree by tree.
+    /// Trees of alpha-edged leaves, tree by tree (dense crowns: about 11 leaves over a covered
+    /// pixel).
     Forest,
     /// Large colorful intersecting transparent spheres, front and back faces in bands
     /// submitted in no particular order.

@@ -153,7 +153,7 @@ impl Strand {
             return None;
         }
         let z = self.za + (self.zb - self.za) * t;
-        let k = clamp01((z - 6.0) / 8.0 + self.tint);
+        let k = clamp01((z - 7.5) / 5.0 + self.tint);
         Some(Shade {
             depth: z,
             color: lerp3([0.95, 0.78, 0.45], [0.22, 0.1, 0.04], k),
