@@ -41,8 +41,8 @@
 //! [`Tail`]: crate::hybrid::Tail
 
 use crate::fragment::Fragment;
-use crate::hybrid::{PaperTail, Tail, TailFormat};
 use crate::row::Row;
+use crate::tail::{PaperTail, Tail, TailFormat};
 use crate::unorm::{div255_floor, mul};
 
 /// Which arithmetic, for code that is written once for both (crate-internal).

@@ -167,7 +167,9 @@ pub mod mlab;
 pub mod resolve;
 pub mod row;
 pub mod spans;
+mod tail;
 pub mod unorm;
+mod vector;
 
 pub use arith::{Arithmetic, Paper, Unbiased};
 pub use batch::SpanBatcher;

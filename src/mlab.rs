@@ -27,9 +27,9 @@ use core::marker::PhantomData;
 
 use crate::arith::{Arithmetic, Unbiased};
 use crate::fragment::Fragment;
-use crate::lanes::{RowLanes, Slot};
 use crate::resolve::{Resolved, resolve_rows};
 use crate::row::Row;
+use crate::vector::{RowLanes, Slot};
 
 /// Compile-time check that a blending array has at least one row.
 pub(crate) struct AtLeastOne<const M: usize>;

@@ -13,8 +13,70 @@
 use glam::{Vec3, Vec4};
 use half::f16;
 
-use crate::lanes::FloatLanes;
 use crate::row::Row;
+
+/// f32 values of one or more pixels: what the resolve is written over.
+pub(crate) trait FloatLanes:
+    Copy + core::ops::Add<Output = Self> + core::ops::Sub<Output = Self> + core::ops::Mul<Output = Self>
+{
+    /// Per-lane unsigned integer (tail fields).
+    type U: Copy;
+    /// Per-lane condition.
+    type Mask: Copy;
+    /// All lanes `v`.
+    fn splat(v: f32) -> Self;
+    /// `if mask { a } else { b }`.
+    fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
+    /// Bit `bit` of `n` is set.
+    fn bit(n: Self::U, bit: u32) -> Self::Mask;
+    /// `n == 0`.
+    fn is_zero(n: Self::U) -> Self::Mask;
+    /// `self > other`.
+    fn gt(self, other: Self) -> Self::Mask;
+    /// `self / other` (IEEE, correctly rounded in both widths).
+    fn div(self, other: Self) -> Self;
+    /// Exact conversion of a small integer (below 2^24).
+    fn from_u(n: Self::U) -> Self;
+    /// Number of significant bits of the largest lane of `n`.
+    fn bit_length(n: Self::U) -> u32;
+}
+
+impl FloatLanes for f32 {
+    type U = u32;
+    type Mask = bool;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn select(mask: bool, a: Self, b: Self) -> Self {
+        if mask { a } else { b }
+    }
+    #[inline(always)]
+    fn bit(n: u32, bit: u32) -> bool {
+        (n >> bit) & 1 != 0
+    }
+    #[inline(always)]
+    fn is_zero(n: u32) -> bool {
+        n == 0
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> bool {
+        self > other
+    }
+    #[inline(always)]
+    fn div(self, other: Self) -> Self {
+        self / other
+    }
+    #[inline(always)]
+    fn from_u(n: u32) -> Self {
+        n as f32
+    }
+    #[inline(always)]
+    fn bit_length(n: u32) -> u32 {
+        u32::BITS - n.leading_zeros()
+    }
+}
 
 /// `1 / 255` rounded to f32; `255.0 * INV255 == 1.0` exactly (tested).
 pub const INV255: f32 = 1.0 / 255.0;
@@ -106,6 +168,70 @@ pub(crate) fn resolve_layers<F: FloatLanes>(layers: impl Iterator<Item = [F; 4]>
     (a, v)
 }
 
+/// The tail resolve, written once for every lane width (`f32` or `f32x8`): color and
+/// transmittance of the tail from its sums. Multiplies and adds are separate (no FMA).
+#[inline(always)]
+pub(crate) fn tail_lanes<F: FloatLanes>(sums: [F::U; 3], alpha: F::U, count: F::U) -> ([F; 3], F) {
+    let inv = F::splat(INV255);
+    let one = F::splat(1.0);
+    let empty = F::is_zero(count);
+    let s_a = F::from_u(alpha) * inv;
+    let n = F::select(empty, one, F::from_u(count));
+    let mean = s_a.div(n);
+    // A mean alpha above 1 (arbitrary bytes only) is clamped to 1: the tail is opaque.
+    let clamped = mean.gt(one);
+    let mean = F::select(clamped, one, mean);
+    let x = one - mean;
+    // T_tail = x^n and the geometric sum S_n = 1 + x + ... + x^(n-1), both by binary
+    // exponentiation over the bits of the count (at most 16; bits above the largest count of
+    // all lanes are zero and would change nothing). The color factor
+    // g = (1 - T_tail) / S_a = (1 - x^n) / (n (1 - x)) = S_n / n
+    // is computed from S_n: only products and sums of non-negative terms, where the printed
+    // formula subtracts two numbers close to 1 (for a tiny mean alpha it lost a third of the
+    // tail's light in f32). g = 1 exactly for pure additive light (x = 1).
+    let mut power = one; // x^k for the bits seen so far
+    let mut sum = F::splat(0.0); // S_k
+    let mut base = x; // x^(2^i)
+    let mut base_sum = one; // S_(2^i)
+    for bit in 0..F::bit_length(count).min(16) {
+        let on = F::bit(count, bit);
+        sum = F::select(on, sum + power * base_sum, sum); // S_(k + 2^i) = S_k + x^k S_(2^i)
+        power = F::select(on, power * base, power);
+        base_sum = base_sum * (one + base); // S_(2^(i+1)) = S_(2^i) (1 + x^(2^i))
+        base = base * base;
+    }
+    let t_tail = F::select(empty, x, power);
+    // A zero count (arbitrary bytes only) resolves as a count of 1: S_1 / 1 = 1. With the
+    // mean clamped, S_a is no longer n (1 - x): x = 0, T_tail = 0 and g = (1 - 0) / S_a.
+    let g = F::select(empty, one, sum.div(n));
+    let g = F::select(clamped, one.div(s_a), g);
+    let g = F::select(g.gt(one), one, g); // rounding only: S_n <= n
+    let [r, gr, b] = sums;
+    (
+        [F::from_u(r) * inv * g, F::from_u(gr) * inv * g, F::from_u(b) * inv * g],
+        t_tail,
+    )
+}
+
+/// Head then tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`.
+#[inline(always)]
+pub(crate) fn combine_lanes<F: FloatLanes>(head: ([F; 3], F), tail: ([F; 3], F)) -> ([F; 3], F) {
+    let ([hr, hg, hb], ht) = head;
+    let ([tr, tg, tb], tt) = tail;
+    ([hr + tr * ht, hg + tg * ht, hb + tb * ht], ht * tt)
+}
+
+/// Resolved head and tail fields to a resolved pixel, for every lane width.
+#[inline(always)]
+pub(crate) fn resolve_lanes<F: FloatLanes>(
+    head: ([F; 3], F),
+    sums: [F::U; 3],
+    alpha: F::U,
+    count: F::U,
+) -> ([F; 3], F) {
+    combine_lanes(head, tail_lanes::<F>(sums, alpha, count))
+}
+
 /// RGBA8 from a pixel: each channel clamped to `[0, 1]`, then `floor(x * 255 + 0.5)`
 /// (NaN becomes 0). Byte order R, G, B, A.
 #[inline]
@@ -116,17 +242,6 @@ pub fn to_rgba8(pixel: Vec4) -> [u8; 4] {
         let x = if x >= 0.0 { x } else { 0.0 };
         crate::unorm::quantize(x)
     })
-}
-
-/// [`to_rgba8`] for 8 lanes, one channel: the byte in the low 8 bits of each lane.
-#[cfg(target_endian = "little")]
-#[inline(always)]
-pub(crate) fn to_unorm8_lanes(x: wide::f32x8) -> wide::u32x8 {
-    let one = wide::f32x8::ONE;
-    let x = x.simd_gt(one).select(one, x);
-    let x = x.simd_ge(wide::f32x8::ZERO).select(x, wide::f32x8::ZERO);
-    let q = x * wide::f32x8::splat(255.0) + wide::f32x8::splat(0.5);
-    bytemuck::cast::<wide::i32x8, wide::u32x8>(q.fast_trunc_int()) & wide::u32x8::splat(0xff)
 }
 
 /// RGBA16F (IEEE half) from a pixel, rounded to nearest even; values above 1 (additive

@@ -90,7 +90,7 @@ pub fn defects(f: &RawFragment) -> (Defects, Expected) {
 /// The reference model of one of the kernel's arithmetics. The kernel's marker types
 /// ([`Paper`], [`Unbiased`]) only name it: every function here is written from the
 /// documented definitions (`src/arith.rs`, `src/unorm.rs`, the tail tables of
-/// `src/hybrid.rs`), and none calls the kernel's arithmetic.
+/// `src/tail.rs`), and none calls the kernel's arithmetic.
 pub trait Model: Arithmetic {
     /// A strict upper bound on the error of one merge product, in steps of `1/255`:
     /// `0.5` for the paper's round to nearest (at most `127/255`, ties cannot occur), `1`

@@ -1,0 +1,297 @@
+//! Lanes: eight pixels at a time, bit-exact with the scalar kernel.
+//!
+//! A software rasterizer shades a primitive a span of pixels at a time; these functions take
+//! one fragment per lane for eight pixels (each lane its own pixel and its own blending
+//! array), with a coverage mask (`u8`, bit `i` = lane `i`; lanes that are off are untouched).
+//!
+//! # Arrangement: layer-major spans
+//!
+//! The rows stay the packed 8-byte [`Row`]. A span of 8 pixels with `M` rows each is stored
+//! layer-major, `[[Row; 8]; M]`: layer `j` of the 8 pixels is 64 contiguous bytes (one cache
+//! line when the span is 64-byte aligned), and each SIMD register holds four whole rows in
+//! its four 64-bit lanes. Nothing is deinterleaved to insert: the depth test is an f32
+//! compare whose result in the odd (depth) dword is widened to the whole 64-bit lane, and the
+//! swap of Listing 1 is two selects of whole rows. [`to_pixel_major`] and [`from_pixel_major`]
+//! convert losslessly to and from the per-pixel `[Row; M]` arrangement of
+//! [`MlabFramebuffer`](crate::MlabFramebuffer); `docs/performance.md` measures the two.
+//!
+//! # One algorithm, two widths
+//!
+//! Listing 1 and 2 are written once ([`crate::mlab`], [`crate::hybrid`]) over the private
+//! `RowLanes` trait (`src/vector.rs`, with its width-1 implementation by [`Row`] and the
+//! tails: the scalar kernel) and implemented for eight rows in two registers in
+//! `src/lanes/x8.rs`, the only file of the crate that uses `wide`. The resolve (Eq. 5-6, the
+//! HT tail) is written once in [`crate::resolve`] over its `FloatLanes` trait, implemented
+//! by `f32` and `wide::f32x8`: scalar and lanes evaluate the same f32 expression tree in the
+//! same order, multiply then add, never FMA. The merge and the tail are exact integer
+//! arithmetic; the lanes use SWAR on 16-bit slots (`pmullw`), the scalar path per-channel
+//! bytes ([`crate::arith`]); both compute the same bytes. This module is the public span
+//! API; lane quantization is [`FragmentLanes`] (`src/lanes/quantize.rs`). No module imports
+//! one that imports it back.
+//!
+//! `wide` picks its instruction set at compile time ([`BACKEND`] says which). Every operation
+//! used here is a native instruction on SSE2 and AVX2 (no `u32` multiply or `u32` min, which
+//! `wide` emulates lane by lane without SSE4.1).
+//!
+//! ```
+//! use mlab::lanes::{self, FragmentLanes};
+//! use mlab::Row;
+//! let mut span = [[Row::EMPTY; 8]; 4]; // 8 pixels, M = 4, layer-major
+//! let frags = FragmentLanes {
+//!     color: [[0.4; 8], [0.0; 8], [0.0; 8]],
+//!     alpha: [0.6; 8],
+//!     depth: [1.0, 2.0, 3.0, f32::NAN, 5.0, 6.0, 7.0, 8.0],
+//! };
+//! let invalid = lanes::mlab_insert_fragments(&mut span, &frags, 0b0111_1111);
+//! assert_eq!(invalid, 0b0000_1000); // lane 3 has a NaN depth: untouched, reported
+//! assert_eq!(span[0][7], Row::EMPTY); // lane 7 was off
+//! assert_eq!(span[0][0], Row::new([102, 0, 0], 102, 1.0)); // 0.4 and 0.6 are exact bytes
+//! ```
+
+mod quantize;
+mod x8;
+
+use crate::arith::{Arithmetic, Unbiased};
+use crate::resolve::{Background, Resolved};
+use crate::row::Row;
+use crate::tail::TailFormat;
+use glam::Vec4;
+use x8::{Mask8, Rows8};
+
+pub use quantize::{FragmentLanes, QuantizedLanes};
+pub use x8::BACKEND;
+
+/// Pixels per lane group.
+pub const LANES: usize = 8;
+
+/// An MLAB span: 8 pixels with `M` rows each, layer-major (`span[j][lane]` is row `j` of
+/// pixel `lane`).
+pub type MlabSpan<const M: usize> = [[Row; LANES]; M];
+
+/// A Hybrid Transparency span: 8 pixels with `K` head rows (layer-major) and 8 tails of the
+/// arithmetic `A` ([`Unbiased`] by default).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[repr(C)]
+pub struct HybridSpan<const K: usize, A: Arithmetic = Unbiased> {
+    /// `head[j][lane]` is head row `j` of pixel `lane`.
+    pub head: [[Row; LANES]; K],
+    /// The tail of each pixel.
+    pub tails: [A::Tail; LANES],
+}
+
+impl<const K: usize, A: Arithmetic> HybridSpan<K, A> {
+    /// Empty heads and tails.
+    pub const fn new() -> Self {
+        HybridSpan {
+            head: [[Row::EMPTY; LANES]; K],
+            tails: [A::Tail::EMPTY; LANES],
+        }
+    }
+}
+
+impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// Listing 1 on 8 pixels in the default arithmetic ([`Unbiased`]): see [`mlab_insert_with`].
+#[inline]
+pub fn mlab_insert<const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
+    mlab_insert_with::<Unbiased, M>(span, rows, mask);
+}
+
+/// Listing 1 on 8 pixels in the arithmetic `A`: insert `rows[lane]` into pixel `lane` for
+/// every lane whose bit is set in `mask`. Byte-identical to
+/// [`crate::mlab::insert_with`]`::<A, M>` on each lane, for any rows.
+#[inline(always)] // a span insert is the inner loop of a rasterizer: never a call
+pub fn mlab_insert_with<A: Arithmetic, const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
+    // Full spans (the common case) skip the mask: with a constant all-ones mask the
+    // compiler drops the ANDs and the final select.
+    if mask == 0xff {
+        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::ALL);
+    } else {
+        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::from_bits(mask));
+    }
+}
+
+/// Listing 2 on 8 pixels. Byte-identical to [`crate::hybrid::insert`] on each lane.
+#[inline]
+pub fn hybrid_insert<const K: usize, A: Arithmetic>(span: &mut HybridSpan<K, A>, rows: &[Row; LANES], mask: u8) {
+    hybrid_insert_parts(&mut span.head, &mut span.tails, rows, mask);
+}
+
+/// [`hybrid_insert`] on a span stored as separate head layers and tails (as in a
+/// [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer)); the tail type picks the layout.
+#[inline]
+pub fn hybrid_insert_parts<T: TailFormat, const K: usize>(
+    head: &mut [[Row; LANES]; K],
+    tails: &mut [T; LANES],
+    rows: &[Row; LANES],
+    mask: u8,
+) {
+    if mask == 0xff {
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::ALL);
+    } else {
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::from_bits(mask));
+    }
+}
+
+/// The lanes of a span insert of fragments that were on but invalid (NaN, infinite or out
+/// of range, as [`crate::Fragment`]'s constructors refuse them): they were **not** inserted.
+/// Bit `i` = lane `i`. Compares with a `u8` mask (`invalid == 0`).
+#[must_use = "the lanes in this mask were not inserted: check it (`is_empty`) or count them"]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct InvalidLanes(pub u8);
+
+impl InvalidLanes {
+    /// The mask, bit `i` = lane `i`.
+    pub const fn bits(self) -> u8 {
+        self.0
+    }
+
+    /// No lane was invalid.
+    pub const fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// How many lanes were invalid.
+    pub const fn count(self) -> u32 {
+        self.0.count_ones()
+    }
+}
+
+impl PartialEq<u8> for InvalidLanes {
+    fn eq(&self, other: &u8) -> bool {
+        self.0 == *other
+    }
+}
+
+impl From<InvalidLanes> for u8 {
+    fn from(v: InvalidLanes) -> u8 {
+        v.0
+    }
+}
+
+/// Validate, quantize and insert (Listing 1) one fragment per lane in the default
+/// arithmetic; returns the lanes that were on but invalid (left untouched).
+#[inline]
+pub fn mlab_insert_fragments<const M: usize>(
+    span: &mut MlabSpan<M>,
+    fragments: &FragmentLanes,
+    mask: u8,
+) -> InvalidLanes {
+    mlab_insert_fragments_with::<Unbiased, M>(span, fragments, mask)
+}
+
+/// [`mlab_insert_fragments`] in the arithmetic `A`.
+#[inline]
+pub fn mlab_insert_fragments_with<A: Arithmetic, const M: usize>(
+    span: &mut MlabSpan<M>,
+    fragments: &FragmentLanes,
+    mask: u8,
+) -> InvalidLanes {
+    let q = fragments.quantize_with::<A>(mask);
+    mlab_insert_with::<A, M>(span, &q.rows, q.valid);
+    InvalidLanes(q.invalid)
+}
+
+/// Validate, quantize and insert (Listing 2) one fragment per lane; returns the invalid lanes.
+#[inline]
+pub fn hybrid_insert_fragments<const K: usize, A: Arithmetic>(
+    span: &mut HybridSpan<K, A>,
+    fragments: &FragmentLanes,
+    mask: u8,
+) -> InvalidLanes {
+    let q = fragments.quantize_with::<A>(mask);
+    hybrid_insert(span, &q.rows, q.valid);
+    InvalidLanes(q.invalid)
+}
+
+/// The resolve of 8 pixels, structure of arrays; lane `i` equals the scalar [`Resolved`]
+/// of pixel `i` bit for bit ([`ResolvedLanes::get`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ResolvedLanes {
+    /// `color[channel][lane]`: premultiplied color of the transparent layers.
+    pub color: [[f32; LANES]; 3],
+    /// Background visibility per lane.
+    pub transmittance: [f32; LANES],
+}
+
+/// Eq. 5 over an MLAB span (as [`crate::resolve_rows`] on each pixel).
+#[inline]
+pub fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> ResolvedLanes {
+    x8::mlab_resolve(span).lanes()
+}
+
+/// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
+#[inline]
+pub fn hybrid_resolve<const K: usize, A: Arithmetic>(span: &HybridSpan<K, A>) -> ResolvedLanes {
+    x8::hybrid_resolve(&span.head, &span.tails).lanes()
+}
+
+impl ResolvedLanes {
+    /// Lane `lane` (0..8) as a scalar [`Resolved`]; `None` past the last lane.
+    pub fn get(&self, lane: usize) -> Option<Resolved> {
+        let t = *self.transmittance.get(lane)?;
+        let c = glam::Vec3::new(self.color[0][lane], self.color[1][lane], self.color[2][lane]);
+        Some(Resolved {
+            color: c,
+            transmittance: t,
+        })
+    }
+
+    /// The 8 pixels for `background` ([`Resolved::pixel`] per lane).
+    pub fn pixels(&self, background: Background) -> [Vec4; LANES] {
+        core::array::from_fn(|i| self.get(i).unwrap_or(Resolved::CLEAR).pixel(background))
+    }
+
+    /// The 8 pixels as RGBA8 ([`crate::to_rgba8`] per lane), computed in lanes.
+    pub fn rgba8(&self, background: Background) -> [[u8; 4]; LANES] {
+        x8::rgba8(&self.color, &self.transmittance, background)
+    }
+}
+
+/// [`mlab_resolve`] straight to RGBA8, without leaving the registers until the end.
+#[inline]
+pub fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
+    x8::mlab_resolve(span).rgba8(background)
+}
+
+/// [`hybrid_resolve`] straight to RGBA8.
+#[inline]
+pub fn hybrid_resolve_rgba8<const K: usize, A: Arithmetic>(
+    span: &HybridSpan<K, A>,
+    background: Background,
+) -> [[u8; 4]; LANES] {
+    hybrid_resolve_parts_rgba8(&span.head, &span.tails, background)
+}
+
+/// [`hybrid_resolve_rgba8`] on separate head layers and tails.
+#[inline]
+pub fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+    background: Background,
+) -> [[u8; 4]; LANES] {
+    x8::hybrid_resolve(head, tails).rgba8(background)
+}
+
+/// [`hybrid_resolve`] on separate head layers and tails.
+#[inline]
+pub fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+) -> ResolvedLanes {
+    x8::hybrid_resolve(head, tails).lanes()
+}
+
+/// The same span in the per-pixel arrangement: `[pixel][row]`.
+pub fn to_pixel_major<const M: usize>(span: &MlabSpan<M>) -> [[Row; M]; LANES] {
+    core::array::from_fn(|lane| core::array::from_fn(|j| span[j][lane]))
+}
+
+/// The inverse of [`to_pixel_major`].
+pub fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> MlabSpan<M> {
+    core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
+}

@@ -1,0 +1,122 @@
+//! Lane quantization: eight fragments (structure of arrays) validated and quantized to rows
+//! as [`crate::Fragment`]'s constructors and [`Arithmetic::quantize`] do lane by lane.
+
+use crate::arith::{Arithmetic, Unbiased};
+use crate::row::Row;
+
+use super::LANES;
+use super::x8;
+
+/// Eight fragments, structure of arrays, linear color: premultiplied for
+/// [`quantize`](Self::quantize) and the `insert_*_fragments` functions, straight for
+/// [`quantize_straight`](Self::quantize_straight) (and
+/// [`Framebuffer::insert_span_straight`](crate::Framebuffer::insert_span_straight)).
+///
+/// ```
+/// use mlab::lanes::FragmentLanes;
+/// let straight = FragmentLanes::from_rgba([[1.0, 0.5, 0.0, 0.5]; 8], [2.0; 8]);
+/// let q = straight.quantize_straight(0xff);
+/// assert_eq!(q.valid, 0xff);
+/// let pre = FragmentLanes::from_fn(|lane| ([0.5, 0.25, 0.0], 0.5, 2.0 + lane as f32));
+/// assert_eq!(pre.depth[7], 9.0);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FragmentLanes {
+    /// `color[channel][lane]`, channels R, G, B.
+    pub color: [[f32; LANES]; 3],
+    /// Alpha per lane.
+    pub alpha: [f32; LANES],
+    /// Depth per lane.
+    pub depth: [f32; LANES],
+}
+
+/// Rows quantized from [`FragmentLanes`], and which lanes were valid.
+#[must_use = "lanes in `invalid` were refused: insert `rows` with the mask `valid`"]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct QuantizedLanes {
+    /// The rows (lanes not in `valid` hold [`Row::EMPTY`]).
+    pub rows: [Row; LANES],
+    /// Lanes that were on and valid.
+    pub valid: u8,
+    /// Lanes that were on and invalid: exactly the lanes where the scalar constructor
+    /// ([`crate::Fragment::premultiplied`] or [`crate::Fragment::straight`]) returns an error.
+    pub invalid: u8,
+}
+
+impl FragmentLanes {
+    /// Eight fragments from `[R, G, B, A]` per lane and a depth per lane (premultiplied or
+    /// straight: the quantizer you call decides).
+    pub fn from_rgba(rgba: [[f32; 4]; LANES], depth: [f32; LANES]) -> FragmentLanes {
+        FragmentLanes {
+            color: core::array::from_fn(|c| core::array::from_fn(|lane| rgba[lane][c])),
+            alpha: core::array::from_fn(|lane| rgba[lane][3]),
+            depth,
+        }
+    }
+
+    /// Eight fragments from `(color [R, G, B], alpha, depth)` per lane.
+    pub fn from_fn(mut f: impl FnMut(usize) -> ([f32; 3], f32, f32)) -> FragmentLanes {
+        let mut out = FragmentLanes::TRANSPARENT;
+        for lane in 0..LANES {
+            let (c, a, z) = f(lane);
+            for (ch, v) in out.color.iter_mut().zip(c) {
+                ch[lane] = v;
+            }
+            out.alpha[lane] = a;
+            out.depth[lane] = z;
+        }
+        out
+    }
+
+    /// Up to eight fragments from slices of `[R, G, B, A]` and depths (the shorter length
+    /// counts); returns the lanes and the mask of the lanes filled (`(1 << n) - 1`). Lanes
+    /// past the slices are [`TRANSPARENT`](Self::TRANSPARENT) and off.
+    pub fn from_slices(rgba: &[[f32; 4]], depth: &[f32]) -> (FragmentLanes, u8) {
+        let n = rgba.len().min(depth.len()).min(LANES);
+        let mut out = FragmentLanes::TRANSPARENT;
+        for (lane, (c, z)) in rgba.iter().zip(depth).take(n).enumerate() {
+            for (ch, v) in out.color.iter_mut().zip(c) {
+                ch[lane] = *v;
+            }
+            out.alpha[lane] = c[3];
+            out.depth[lane] = *z;
+        }
+        (out, ((1u16 << n) - 1) as u8)
+    }
+
+    /// Eight fully transparent black fragments at depth 0 (valid; a placeholder for lanes
+    /// that are off).
+    pub const TRANSPARENT: FragmentLanes = FragmentLanes {
+        color: [[0.0; LANES]; 3],
+        alpha: [0.0; LANES],
+        depth: [0.0; LANES],
+    };
+
+    /// Validate and quantize premultiplied fragments in the default arithmetic
+    /// ([`Unbiased`]): see [`quantize_with`](Self::quantize_with).
+    pub fn quantize(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl::<Unbiased>(mask, false)
+    }
+
+    /// Validate and quantize premultiplied fragments as [`crate::Fragment::premultiplied`]
+    /// then [`Arithmetic::quantize`] would, lane by lane.
+    pub fn quantize_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl::<A>(mask, false)
+    }
+
+    /// Validate and quantize straight-color fragments in the default arithmetic: see
+    /// [`quantize_straight_with`](Self::quantize_straight_with).
+    pub fn quantize_straight(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl::<Unbiased>(mask, true)
+    }
+
+    /// Validate and quantize straight-color fragments, as [`crate::Fragment::straight`] then
+    /// [`Arithmetic::quantize`] would (`color * alpha`, one f32 multiply).
+    pub fn quantize_straight_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
+        self.quantize_impl::<A>(mask, true)
+    }
+
+    fn quantize_impl<A: Arithmetic>(&self, mask: u8, straight: bool) -> QuantizedLanes {
+        x8::quantize::<A>(self, mask, straight)
+    }
+}

@@ -1,0 +1,767 @@
+//! The 8-wide implementation of the lane traits ([`crate::vector`],
+//! [`crate::resolve::FloatLanes`]): eight rows in two 256-bit registers, SWAR merges and tail
+//! adds on 16-bit slots, the lane quantizer and the resolve's register layout. The only file
+//! of the crate that uses `wide`.
+
+use super::{FragmentLanes, MlabSpan, QuantizedLanes};
+use crate::arith::{Arithmetic, Kind, MIX_K};
+use crate::resolve::{Background, FloatLanes};
+use crate::row::Row;
+use crate::tail::{Layout, TailFormat};
+use crate::vector::{RowLanes, Slot};
+use bytemuck::cast;
+use wide::{f32x8, f64x4, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
+
+use super::LANES;
+
+/// The SIMD instruction set `wide` compiled the lanes for, chosen at compile time:
+///
+/// - `"avx2 (avx512f build)"`: a build with `avx512f` (`x86-64-v4`). `wide` 1.7 keeps every
+///   256-bit type the lanes use in one `ymm` register and calls the AVX2 intrinsics of an
+///   `"avx2"` build: its only AVX-512 paths for these types are shuffles, per-lane variable
+///   shifts, widening multiplies and f64-to-integer conversions, none of which the lanes call.
+///   LLVM may still encode the code with EVEX and mask registers.
+/// - `"avx2"`: one 256-bit register per 8-wide vector.
+/// - `"sse2"`: x86 without AVX2, two 128-bit halves (`wide` uses SSSE3, SSE4.1 or AVX where
+///   the build has them).
+/// - `"neon"`: two 128-bit NEON halves (aarch64).
+/// - `"simd128"`: two 128-bit halves (wasm32 with `simd128`).
+/// - `"portable"`: no SIMD, plain arrays (wasm32 without `simd128`, any other target).
+pub const BACKEND: &str = if cfg!(target_feature = "avx512f") {
+    "avx2 (avx512f build)"
+} else if cfg!(target_feature = "avx2") {
+    "avx2"
+} else if cfg!(target_feature = "sse2") {
+    "sse2"
+} else if cfg!(all(target_arch = "aarch64", target_feature = "neon")) {
+    "neon"
+} else if cfg!(all(target_family = "wasm", target_feature = "simd128")) {
+    "simd128"
+} else {
+    "portable"
+};
+
+impl Slot<Rows8> for [Row; LANES] {
+    #[inline(always)]
+    fn load(&self) -> Rows8 {
+        Rows8::load(self)
+    }
+    #[inline(always)]
+    fn store(&mut self, value: Rows8) {
+        *self = value.store();
+    }
+}
+
+impl<T: TailFormat> Slot<Rows8> for [T; LANES] {
+    #[inline(always)]
+    fn load(&self) -> Rows8 {
+        Rows8::load_tails(self)
+    }
+    #[inline(always)]
+    fn store(&mut self, value: Rows8) {
+        *self = value.store_tails();
+    }
+}
+
+impl FloatLanes for f32x8 {
+    type U = u32x8;
+    type Mask = f32x8;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        f32x8::splat(v)
+    }
+    #[inline(always)]
+    fn select(mask: f32x8, a: Self, b: Self) -> Self {
+        mask.select(a, b)
+    }
+    #[inline(always)]
+    fn bit(n: u32x8, bit: u32) -> f32x8 {
+        let one = u32x8::splat(1 << bit);
+        cast((n & one).simd_eq(one))
+    }
+    #[inline(always)]
+    fn is_zero(n: u32x8) -> f32x8 {
+        cast(n.simd_eq(u32x8::ZERO))
+    }
+    #[inline(always)]
+    fn gt(self, other: Self) -> f32x8 {
+        self.simd_gt(other)
+    }
+    #[inline(always)]
+    fn div(self, other: Self) -> Self {
+        self / other
+    }
+    #[inline(always)]
+    fn from_u(n: u32x8) -> Self {
+        cast::<u32x8, i32x8>(n).round_float()
+    }
+    #[inline(always)]
+    fn bit_length(n: u32x8) -> u32 {
+        u32::BITS - n.to_array().iter().fold(0, |m, &x| m | x).leading_zeros()
+    }
+}
+
+/// Low dword of every 64-bit lane (a row's color and transmittance; a tail's color sums).
+const LO: u32x8 = u32x8::new([!0, 0, !0, 0, !0, 0, !0, 0]);
+/// High dword of every 64-bit lane (a row's depth; a tail's alpha sum and count).
+const HI: u32x8 = u32x8::new([0, !0, 0, !0, 0, !0, 0, !0]);
+const BYTES02: u32x8 = u32x8::splat(0x00ff_00ff);
+
+/// Eight rows (or eight tails), one per lane: lanes 0-3 in `a`, 4-7 in `b`, each 64-bit
+/// lane one whole row (`word0` in the low dword, `word1` in the high dword).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Rows8 {
+    a: u32x8,
+    b: u32x8,
+}
+
+/// Per-lane mask for [`Rows8`]: all ones or all zeros over each 64-bit lane (with AVX, only
+/// the sign bit of each 64-bit lane is meaningful: see [`BLENDV_PD`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Mask8 {
+    a: u32x8,
+    b: u32x8,
+}
+
+impl core::ops::BitAnd for Mask8 {
+    type Output = Mask8;
+    #[inline(always)]
+    fn bitand(self, rhs: Mask8) -> Mask8 {
+        Mask8 {
+            a: self.a & rhs.a,
+            b: self.b & rhs.b,
+        }
+    }
+}
+
+impl Mask8 {
+    /// Every lane on.
+    pub(super) const ALL: Mask8 = Mask8 {
+        a: u32x8::MAX,
+        b: u32x8::MAX,
+    };
+
+    /// From a bitmask (bit `i` = lane `i`).
+    #[inline(always)]
+    pub(super) fn from_bits(bits: u8) -> Mask8 {
+        let v = u32x8::splat(bits as u32);
+        let sa = u32x8::new([1, 1, 2, 2, 4, 4, 8, 8]);
+        let sb = u32x8::new([16, 16, 32, 32, 64, 64, 128, 128]);
+        Mask8 {
+            a: (v & sa).simd_eq(sa),
+            b: (v & sb).simd_eq(sb),
+        }
+    }
+}
+
+/// Copy the mask in the high dword of each 64-bit lane to the whole lane.
+#[inline(always)]
+fn widen_hi(m: u32x8) -> u32x8 {
+    let h = m & HI;
+    h | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(h) >> 32)
+}
+
+/// Copy the mask in the low dword of each 64-bit lane to the whole lane.
+#[inline(always)]
+fn widen_lo(m: u32x8) -> u32x8 {
+    let l = m & LO;
+    l | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(l) << 32)
+}
+
+/// `round(x / 255)` in each 16-bit slot holding `x <= 65025`: `((x + 128) * 257) >> 16`,
+/// one add and one high multiply (`pmulhuw`). Equal to [`crate::unorm::div255`] for every
+/// such `x` (`div255_slots_is_exact` checks all of them).
+#[inline(always)]
+fn div255_slots(x: u16x16) -> u16x16 {
+    (x + u16x16::splat(128)).mul_keep_high(u16x16::splat(257))
+}
+
+/// `T_front` in both 16-bit slots of each row's low dword (the high dword is don't-care),
+/// and the back row's bytes 0 and 2 (R, B) and 1 and 3 (G, T), one per 16-bit slot.
+#[inline(always)]
+fn merge_operands(front: u32x8, back: u32x8) -> (u16x16, u16x16, u16x16) {
+    let t = (front >> 24) & u32x8::splat(0xff);
+    let t2: u16x16 = cast(t | (t << 16));
+    let even: u16x16 = cast(back & BYTES02);
+    let odd: u16x16 = cast((back >> 8) & BYTES02);
+    (t2, even, odd)
+}
+
+/// `A_front + products` bytewise, saturating; the front's T byte is replaced by the
+/// product's T; the depth is the front's.
+#[inline(always)]
+fn merge_result(front: u32x8, pe: u16x16, po: u16x16) -> u32x8 {
+    let product = cast::<u16x16, u32x8>(pe) | (cast::<u16x16, u32x8>(po) << 8);
+    let a_front = front & u32x8::splat(0x00ff_ffff);
+    let sum: u32x8 = cast(cast::<u32x8, u8x32>(a_front).saturating_add(cast(product)));
+    (sum & LO) | (front & HI)
+}
+
+/// The paper's merge (Eq. 7-8) for four rows in one register: SWAR over 16-bit slots.
+#[inline(always)]
+fn merge4_paper(front: u32x8, back: u32x8) -> u32x8 {
+    let (t2, even, odd) = merge_operands(front, back);
+    // Each product <= 255 * 255: no carry out of its slot.
+    merge_result(front, div255_slots(even * t2), div255_slots(odd * t2))
+}
+
+/// `[MIX_K; 16]`: the multiplier of [`crate::arith::mix16`].
+const K: u16x16 = u16x16::splat(MIX_K as u16);
+/// Turns `d` in both slots into `[255 - d, d + 1]` (G slot, T slot): `(d ^ 0xffff) + 256`
+/// is `255 - d` modulo 2^16.
+const ODD_XOR: u16x16 = u16x16::new([
+    0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0,
+]);
+const ODD_ADD: u16x16 = u16x16::new([256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1]);
+
+/// [`crate::arith::merge_dither`] of eight row pairs at once: `d` of pixel `p` in both
+/// 16-bit slots of the low dword of its 64-bit lane, lanes 0-3 in the first register and
+/// 4-7 in the second (high dwords don't-care). The eight folds share one register for the
+/// mix (pixels 0-3 in the low dwords, 4-7 in the high dwords).
+#[inline(always)]
+fn merge_dither8(front: Rows8, back: Rows8) -> (u16x16, u16x16) {
+    let fa = front.a ^ back.a;
+    let fb = front.b ^ back.b;
+    // word0 ^ word1 of each pair: in the low dword for a, in the high dword for b.
+    let xa = fa ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(fa) >> 32);
+    let xb = fb ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(fb) << 32);
+    let x = HI.select(xb, xa);
+    // Both 16-bit slots of each dword = lo ^ hi (x ^ rotate(x, 16)), then the multiplicative
+    // mix. Written as a rotate, LLVM emits one byte shuffle where it can.
+    let s: u16x16 = cast(x ^ ((x >> 16) | (x << 16)));
+    let s: u16x16 = s * K;
+    let d = s.mul_keep_high(u16x16::splat(255)); // 0..=254
+    let db = cast::<u64x4, u16x16>(cast::<u16x16, u64x4>(d) >> 32);
+    (d, db)
+}
+
+/// The unbiased merge ([`Unbiased`]) for four rows in one register, with their dither `d`
+/// ([`merge_dither8`]): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
+/// `d' = d` for T and `254 - d` for the colors.
+#[inline(always)]
+fn merge4_unbiased(front: u32x8, back: u32x8, d: u16x16) -> u32x8 {
+    let (t2, even, odd) = merge_operands(front, back);
+    let inv = u16x16::splat(255) - d; // (254 - d) + 1: R and B
+    let odd_d = (d ^ ODD_XOR) + ODD_ADD; // G: (254 - d) + 1, T: d + 1
+    let m257 = u16x16::splat(257);
+    // Products <= 65025, plus at most 255: no carry out of a slot.
+    let pe = (even * t2 + inv).mul_keep_high(m257);
+    let po = (odd * t2 + odd_d).mul_keep_high(m257);
+    merge_result(front, pe, po)
+}
+
+/// [`PaperTail`](crate::hybrid::PaperTail)`::add` for four tails in one register.
+#[inline(always)]
+fn tail_add4_paper(tail: u32x8, row: u32x8) -> u32x8 {
+    let field = u32x8::splat(0x3ff);
+    let byte = u32x8::splat(0xff);
+    let max: i16x16 = i16x16::splat(1023);
+    // Color sums: each field + its byte, capped at 1023 (values < 2^15: i16 min is exact).
+    let sat = |sum: u32x8| -> u32x8 { cast(cast::<u32x8, i16x16>(sum).min(max)) };
+    let r = sat((tail & field) + (row & byte));
+    let g = sat(((tail >> 10) & field) + ((row >> 8) & byte));
+    let b = sat(((tail >> 20) & field) + ((row >> 16) & byte));
+    let word0 = r | (g << 10) | (b << 20) | (tail & u32x8::splat(0xc000_0000));
+    // Alpha sum += 255 - T and count += 1: two saturating u16 adds in the high dword.
+    let inc = (u32x8::splat(255) - (row >> 24)) | u32x8::splat(1 << 16);
+    let inc = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(inc & LO) << 32);
+    let word1: u32x8 = cast(cast::<u32x8, u16x16>(tail).saturating_add(cast(inc)));
+    let new = (word0 & LO) | (word1 & HI);
+    // Invisible rows (no color, T = 255) are skipped.
+    let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
+    invisible.select(tail, new)
+}
+
+impl Rows8 {
+    #[inline(always)]
+    pub(super) fn load(rows: &[Row; 8]) -> Rows8 {
+        let [a, b]: [u32x8; 2] = cast(*rows);
+        Rows8 { a, b }
+    }
+
+    #[inline(always)]
+    fn store(self) -> [Row; 8] {
+        cast([self.a, self.b])
+    }
+
+    #[inline(always)]
+    fn load_tails<T: TailFormat>(tails: &[T; 8]) -> Rows8 {
+        let [a, b]: [u32x8; 2] = cast(*tails);
+        Rows8 { a, b }
+    }
+
+    #[inline(always)]
+    fn store_tails<T: TailFormat>(self) -> [T; 8] {
+        cast([self.a, self.b])
+    }
+}
+
+/// Low dword masks for the fields of the wide tail.
+const BYTE_LO: u32x8 = u32x8::new([0xff, 0, 0xff, 0, 0xff, 0, 0xff, 0]);
+const SUM_LO: u32x8 = u32x8::new([0x1fff, 0, 0x1fff, 0, 0x1fff, 0, 0x1fff, 0]);
+const ALPHA_LO: u32x8 = u32x8::new([0x3fff, 0, 0x3fff, 0, 0x3fff, 0, 0x3fff, 0]);
+const ONE_LO: u32x8 = u32x8::new([1, 0, 1, 0, 1, 0, 1, 0]);
+
+/// [`Tail`](crate::Tail)`::add` for four tails in one register (each tail one `u64`:
+/// colors at bits 0, 13, 26, alpha at 39, count at 53).
+#[inline(always)]
+fn tail_add4_wide(tail: u32x8, row: u32x8) -> u32x8 {
+    let shr = |v: u32x8, n: u64| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(v) >> n);
+    let shl = |v: u32x8, n: u64| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(v) << n);
+    // Sums below 2^15 in the low 16-bit slot, zero elsewhere: i16 min is exact.
+    let sat = |v: u32x8, max: i16| -> u32x8 { cast(cast::<u32x8, i16x16>(v).min(i16x16::splat(max))) };
+    let r = row & BYTE_LO;
+    let g = (row >> 8) & BYTE_LO;
+    let b = (row >> 16) & BYTE_LO;
+    let a = ((row >> 24) ^ BYTE_LO) & BYTE_LO; // 255 - T
+    let sr = sat((tail & SUM_LO) + r, 8191);
+    let sg = sat(((tail >> 13) & SUM_LO) + g, 8191);
+    let sb = sat((shr(tail, 26) & SUM_LO) + b, 8191);
+    let sa = sat((shr(tail, 39) & ALPHA_LO) + a, 16383);
+    let sn = sat(shr(tail, 53) + ONE_LO, 2047);
+    let new = sr | (sg << 13) | shl(sb, 26) | shl(sa, 39) | shl(sn, 53);
+    // Invisible rows (no color, T = 255) are skipped.
+    let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
+    invisible.select(tail, new)
+}
+
+/// With AVX, a select of whole rows is `vblendvpd`, which reads only the sign bit of each
+/// 64-bit lane, that is the depth dword's compare result: the masks need no widening.
+/// Without AVX the select is bitwise and the masks are widened to whole lanes. Both give
+/// the same rows.
+const BLENDV_PD: bool = cfg!(target_feature = "avx");
+
+impl RowLanes for Rows8 {
+    type Mask = Mask8;
+    type Tail<T: TailFormat> = Rows8;
+    #[inline(always)]
+    fn depth_le(self, other: Self) -> Mask8 {
+        let le = |x: u32x8, y: u32x8| {
+            let m = cast::<f32x8, u32x8>(cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y)));
+            // Only the high (depth) dword of each lane is meaningful.
+            if BLENDV_PD { m } else { widen_hi(m) }
+        };
+        Mask8 {
+            a: le(self.a, other.a),
+            b: le(self.b, other.b),
+        }
+    }
+    #[inline(always)]
+    fn select(mask: Mask8, x: Self, y: Self) -> Self {
+        let sel = |m: u32x8, p: u32x8, q: u32x8| -> u32x8 {
+            if BLENDV_PD {
+                cast(cast::<u32x8, f64x4>(m).select(cast::<u32x8, f64x4>(p), cast::<u32x8, f64x4>(q)))
+            } else {
+                m.select(p, q)
+            }
+        };
+        Rows8 {
+            a: sel(mask.a, x.a, y.a),
+            b: sel(mask.b, x.b, y.b),
+        }
+    }
+    #[inline(always)]
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
+        match A::KIND {
+            Kind::Paper => Rows8 {
+                a: merge4_paper(front.a, back.a),
+                b: merge4_paper(front.b, back.b),
+            },
+            Kind::Unbiased => {
+                let (da, db) = merge_dither8(front, back);
+                Rows8 {
+                    a: merge4_unbiased(front.a, back.a, da),
+                    b: merge4_unbiased(front.b, back.b, db),
+                }
+            }
+        }
+    }
+    #[inline(always)]
+    fn tail_add<T: TailFormat>(tail: Rows8, row: Self) -> Rows8 {
+        let f = match T::LAYOUT {
+            Layout::Paper => tail_add4_paper,
+            Layout::Wide => tail_add4_wide,
+        };
+        Rows8 {
+            a: f(tail.a, row.a),
+            b: f(tail.b, row.b),
+        }
+    }
+    #[inline(always)]
+    fn select_tail<T: TailFormat>(mask: Mask8, x: Rows8, y: Rows8) -> Rows8 {
+        Self::select(mask, x, y)
+    }
+}
+
+/// [`FragmentLanes::quantize_with`] and [`FragmentLanes::quantize_straight_with`].
+#[inline(always)]
+pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: bool) -> QuantizedLanes {
+    let zero = f32x8::ZERO;
+    let one = f32x8::ONE;
+    let alpha = f32x8::new(f.alpha);
+    let depth = f32x8::new(f.depth);
+    // Every comparison is false for NaN, so NaN anywhere makes the lane invalid.
+    let mut ok = alpha.simd_ge(zero) & alpha.simd_le(one) & depth.abs().simd_lt(f32x8::splat(f32::INFINITY));
+    let mut pre = [zero; 3];
+    for (c, out) in f.color.iter().zip(pre.iter_mut()) {
+        let raw = f32x8::new(*c);
+        *out = if straight {
+            ok &= raw.simd_ge(zero) & raw.simd_lt(f32x8::splat(f32::INFINITY));
+            raw * alpha
+        } else {
+            raw
+        };
+        ok &= out.simd_ge(zero) & out.simd_le(one);
+    }
+    let half = f32x8::splat(0.5);
+    let u = match A::KIND {
+        Kind::Paper => half,
+        // Faint fragments dithered, the others to nearest (as `Unbiased::quantize`).
+        Kind::Unbiased => {
+            let faint = (alpha * f32x8::splat(255.0)).simd_lt(f32x8::splat(crate::arith::FAINT_BYTES));
+            faint.select(fragment_dither8(pre, alpha, depth), half)
+        }
+    };
+    let bytes = pre.map(|c| quantize8(c, u));
+    let t = u32x8::splat(255) - quantize8(alpha, u);
+    let rgbt: [u32; LANES] = cast(bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24));
+    let z: [u32; LANES] = cast(depth);
+    let valid = (ok.to_bitmask() as u8) & mask;
+    let rows = core::array::from_fn(|i| {
+        if valid & (1 << i) != 0 {
+            Row::from_words([rgbt[i], z[i]])
+        } else {
+            Row::EMPTY
+        }
+    });
+    QuantizedLanes {
+        rows,
+        valid,
+        invalid: mask & !valid,
+    }
+}
+
+/// [`crate::arith::fragment_dither`] for 8 lanes (16-bit mix in the low slot of each dword).
+#[inline(always)]
+fn fragment_dither8(pre: [f32x8; 3], alpha: f32x8, depth: f32x8) -> f32x8 {
+    let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
+    let x = bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth);
+    let s: u16x16 = cast((x ^ (x >> 16)) & u32x8::splat(0xffff));
+    let s: u16x16 = s * K;
+    let h = cast::<u16x16, u32x8>(s >> 8) & u32x8::splat(0xff);
+    (f32x8::from_u(h) + f32x8::splat(0.5)) * f32x8::splat(1.0 / 256.0)
+}
+
+/// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`);
+/// other lanes give unspecified bytes and must be masked.
+#[inline(always)]
+fn quantize8(v: f32x8, u: f32x8) -> u32x8 {
+    let x = v * f32x8::splat(255.0) + u;
+    cast::<i32x8, u32x8>(x.fast_trunc_int()) & u32x8::splat(0xff)
+}
+
+/// Where pixel `p` of a span sits in the registers of the resolve: the 8 row words are
+/// packed without a shuffle as `(a & LO) | (b << 32)`, which orders the pixels
+/// `[0, 4, 1, 5, 2, 6, 3, 7]`. Every resolve step is per lane, so the order only matters when
+/// the results are written out.
+const POSITION: [usize; LANES] = [0, 2, 4, 6, 1, 3, 5, 7];
+
+/// `word0` of 8 rows (or tails) in one register, pixels in [`POSITION`] order.
+#[inline(always)]
+fn words0(r: Rows8) -> u32x8 {
+    (r.a & LO) | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.b) << 32)
+}
+
+/// `word1` of 8 rows (or tails) in one register, pixels in [`POSITION`] order.
+#[inline(always)]
+fn words1(r: Rows8) -> u32x8 {
+    cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.a) >> 32) | (r.b & HI)
+}
+
+/// Back to pixel order.
+#[inline(always)]
+fn unpermute<T: Copy>(x: [T; LANES]) -> [T; LANES] {
+    core::array::from_fn(|p| x[POSITION[p]])
+}
+
+/// Color and transmittance bytes of one layer of 8 rows, as exact f32 (`[R, G, B, T]`).
+#[inline(always)]
+fn layer_bytes(layer: &[Row; LANES]) -> [f32x8; 4] {
+    let rgbt = words0(Rows8::load(layer));
+    let byte = u32x8::splat(0xff);
+    [rgbt & byte, (rgbt >> 8) & byte, (rgbt >> 16) & byte, rgbt >> 24].map(f32x8::from_u)
+}
+
+/// The HT resolve in registers, pixels in [`POSITION`] order.
+#[inline(always)]
+fn hybrid_resolve_regs<T: TailFormat, const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+) -> ([f32x8; 3], f32x8) {
+    let head = crate::resolve::resolve_layers(head.iter().map(layer_bytes));
+    let tails = Rows8::load_tails(tails);
+    let (w0, w1) = (words0(tails), words1(tails));
+    let (sums, alpha, count) = match T::LAYOUT {
+        Layout::Paper => {
+            let field = u32x8::splat(0x3ff);
+            let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
+            (sums, w1 & u32x8::splat(0xffff), w1 >> 16)
+        }
+        Layout::Wide => {
+            // Colors at bits 0, 13, 26 (the last one across the words), alpha at 39, count at 53.
+            let field = u32x8::splat(0x1fff);
+            let blue = (w0 >> 26) | ((w1 & u32x8::splat(0x7f)) << 6);
+            (
+                [w0 & field, (w0 >> 13) & field, blue],
+                (w1 >> 7) & u32x8::splat(0x3fff),
+                w1 >> 21,
+            )
+        }
+    };
+    crate::resolve::resolve_lanes::<f32x8>(head, sums, alpha, count)
+}
+
+/// [`crate::to_rgba8`] for 8 lanes, one channel: the byte in the low 8 bits of each lane.
+#[cfg(target_endian = "little")]
+#[inline(always)]
+fn to_unorm8_lanes(x: f32x8) -> u32x8 {
+    let one = f32x8::ONE;
+    let x = x.simd_gt(one).select(one, x);
+    let x = x.simd_ge(f32x8::ZERO).select(x, f32x8::ZERO);
+    let q = x * f32x8::splat(255.0) + f32x8::splat(0.5);
+    cast::<i32x8, u32x8>(q.fast_trunc_int()) & u32x8::splat(0xff)
+}
+
+/// [`crate::to_rgba8`] of [`Resolved::pixel`] for 8 lanes; the output keeps the lane order.
+#[inline(always)]
+fn rgba8_lanes(c: [f32x8; 3], t: f32x8, background: Background) -> [[u8; 4]; LANES] {
+    let rgba: [f32x8; 4] = match background {
+        Background::Opaque(bg) => {
+            let bg = bg.to_array().map(f32x8::splat);
+            [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t, f32x8::ONE]
+        }
+        Background::Transparent => [c[0], c[1], c[2], f32x8::ONE - t],
+    };
+    let q = rgba.map(to_unorm8_lanes);
+    let packed: [u32; LANES] = cast(q[0] | (q[1] << 8) | (q[2] << 16) | (q[3] << 24));
+    packed.map(u32::to_le_bytes)
+}
+
+/// A resolve of 8 pixels in registers, pixels in [`POSITION`] order.
+#[derive(Clone, Copy)]
+pub(super) struct Resolved8 {
+    color: [f32x8; 3],
+    t: f32x8,
+}
+
+impl Resolved8 {
+    /// Structure of arrays, in pixel order.
+    #[inline(always)]
+    pub(super) fn lanes(self) -> super::ResolvedLanes {
+        super::ResolvedLanes {
+            color: self.color.map(|c| unpermute(c.to_array())),
+            transmittance: unpermute(self.t.to_array()),
+        }
+    }
+
+    /// RGBA8 in pixel order.
+    #[inline(always)]
+    pub(super) fn rgba8(self, background: Background) -> [[u8; 4]; LANES] {
+        unpermute(rgba8_lanes(self.color, self.t, background))
+    }
+}
+
+/// Eq. 5 over an MLAB span.
+#[inline(always)]
+pub(super) fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> Resolved8 {
+    let (color, t) = crate::resolve::resolve_layers(span.iter().map(layer_bytes));
+    Resolved8 { color, t }
+}
+
+/// The HT resolve of head layers and tails.
+#[inline(always)]
+pub(super) fn hybrid_resolve<T: TailFormat, const K: usize>(head: &[[Row; LANES]; K], tails: &[T; LANES]) -> Resolved8 {
+    let (color, t) = hybrid_resolve_regs(head, tails);
+    Resolved8 { color, t }
+}
+
+/// [`crate::to_rgba8`] per lane of a resolve given as arrays (lane order kept).
+#[inline(always)]
+pub(super) fn rgba8(color: &[[f32; LANES]; 3], t: &[f32; LANES], background: Background) -> [[u8; 4]; LANES] {
+    rgba8_lanes(color.map(f32x8::new), f32x8::new(*t), background)
+}
+
+#[cfg(test)]
+mod tests {
+    //! The lane arithmetic helpers against plain integer formulas, for every operand
+    //! combination they can see (16-bit slots, the SWAR tail fields), so that a backend whose
+    //! `wide` lowering differs shows up on the first run, before any randomized test.
+    use super::*;
+
+    /// Four whole rows (or tails) as the `u64` lanes of one register.
+    fn pack(v: [u64; 4]) -> u32x8 {
+        cast(v)
+    }
+
+    fn unpack(x: u32x8) -> [u64; 4] {
+        cast(x)
+    }
+
+    #[test]
+    fn div255_slots_is_exact() {
+        for x in 0..=255u32 * 255 {
+            let got = div255_slots(u16x16::splat(x as u16)).to_array();
+            assert!(got.iter().all(|&q| q as u32 == crate::unorm::div255(x)), "x = {x}");
+        }
+    }
+
+    /// A front row with transmittance `tf` and colors that exercise the saturating add.
+    fn front(tf: u32, salt: u32) -> u64 {
+        let c = (tf * 37 + salt * 11) & 0xff;
+        Row::new([c as u8, (c ^ 0x80) as u8, (255 - c) as u8], tf as u8, -(salt as f32)).to_le_u64()
+    }
+
+    /// The back row for byte `b`: every channel sees every byte value as `b` runs over 0..256.
+    fn back(b: u32) -> u64 {
+        Row::new([b as u8, (b ^ 0x5a) as u8, (b ^ 0xa5) as u8], (b ^ 0x3c) as u8, 7.5).to_le_u64()
+    }
+
+    /// The merge of `front` and `back` with products `p(a, b)` (colors) and `q(a, b)` (T).
+    fn merged(front: u64, back: u64, p: impl Fn(u32, u32) -> u32, q: impl Fn(u32, u32) -> u32) -> u64 {
+        let f = Row::from_le_u64(front);
+        let b = Row::from_le_u64(back);
+        let [fr, fg, fb, ft] = f.rgbt().map(u32::from);
+        let [br, bg, bb, bt] = b.rgbt().map(u32::from);
+        let add = |a: u32, x: u32| (a + p(x, ft)).min(255) as u8;
+        Row::new([add(fr, br), add(fg, bg), add(fb, bb)], q(bt, ft) as u8, f.depth()).to_le_u64()
+    }
+
+    /// The paper's merge in 16-bit slots: every (T_front, back byte) pair in every channel.
+    #[test]
+    fn merge4_paper_is_exact_for_every_operand_pair() {
+        let round = |x: u32, t: u32| (x * t + 127) / 255; // 255 is odd: never a tie
+        for tf0 in (0..256).step_by(4) {
+            let tfs = [tf0, tf0 + 1, tf0 + 2, tf0 + 3];
+            for b in 0..256 {
+                let fr = tfs.map(|t| front(t, b));
+                let got = unpack(merge4_paper(pack(fr), pack([back(b); 4])));
+                for i in 0..4 {
+                    assert_eq!(
+                        got[i],
+                        merged(fr[i], back(b), round, round),
+                        "T_front {}, b {b}",
+                        tfs[i]
+                    );
+                }
+            }
+        }
+    }
+
+    /// The unbiased merge in 16-bit slots: every (T_front, back byte, dither) triple in every
+    /// channel, `floor((x * T_front + 254 - d) / 255)` for colors, `floor((T * T_front + d) /
+    /// 255)` for T.
+    #[test]
+    fn merge4_unbiased_is_exact_for_every_operand_triple() {
+        for tf in 0..256 {
+            for d0 in (0..255).step_by(4) {
+                let ds: [u32; 4] = core::array::from_fn(|i| (d0 + i as u32).min(254));
+                // `d` in both 16-bit slots of each row's low dword (as `merge_dither8` leaves it).
+                let dv: u16x16 = cast(pack(ds.map(|d| (d | d << 16) as u64)));
+                for b in 0..256 {
+                    let fr = [front(tf, b); 4];
+                    let got = unpack(merge4_unbiased(pack(fr), pack([back(b); 4]), dv));
+                    for (i, &d) in ds.iter().enumerate() {
+                        let want = merged(fr[i], back(b), |x, t| (x * t + 254 - d) / 255, |x, t| (x * t + d) / 255);
+                        assert_eq!(got[i], want, "T_front {tf}, b {b}, d {d}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// `min(s + x, max)`.
+    fn sat(s: u64, x: u64, max: u64) -> u64 {
+        (s + x).min(max)
+    }
+
+    /// A row of color bytes `c` and alpha byte `a` (T = 255 - a); invisible when all are 0.
+    fn row(c: [u32; 3], a: u32) -> u64 {
+        Row::new(c.map(|v| v as u8), (255 - a) as u8, 1.0).to_le_u64()
+    }
+
+    /// The wide tail add: every (field value, byte) pair of every field (colors 0..8192,
+    /// alpha 0..16384, count 0..2048 with a visible row), and invisible rows skipped.
+    #[test]
+    fn tail_add4_wide_is_exact_for_every_operand_pair() {
+        let tail = |c: [u64; 3], a: u64, n: u64| c[0] | c[1] << 13 | c[2] << 26 | a << 39 | n << 53;
+        for s0 in (0..16384u64).step_by(4) {
+            for x in 0..256u32 {
+                let ss = [s0, s0 + 1, s0 + 2, s0 + 3];
+                let cs = ss.map(|s| [s & 8191, (s * 3 + 1) & 8191, (s ^ 8191) & 8191]);
+                let tails: [u64; 4] = core::array::from_fn(|i| tail(cs[i], ss[i], ss[i] & 2047));
+                // Lane 3 keeps an invisible row whenever x == 0.
+                let rows = [
+                    row([x, x ^ 0x81, 255 - x], x),
+                    row([255 - x, x, x], 255 - x),
+                    row([x, 0, x], x ^ 0xf0),
+                    row([x; 3], x),
+                ];
+                let got = unpack(tail_add4_wide(pack(tails), pack(rows)));
+                for i in 0..4 {
+                    let r = Row::from_le_u64(rows[i]);
+                    let [cr, cg, cb, t] = r.rgbt().map(u64::from);
+                    let want = if r.is_invisible() {
+                        tails[i]
+                    } else {
+                        let c = cs[i];
+                        tail(
+                            [sat(c[0], cr, 8191), sat(c[1], cg, 8191), sat(c[2], cb, 8191)],
+                            sat(ss[i], 255 - t, 16383),
+                            sat(ss[i] & 2047, 1, 2047),
+                        )
+                    };
+                    assert_eq!(got[i], want, "tail {:#x}, row {:#x}", tails[i], rows[i]);
+                }
+            }
+        }
+    }
+
+    /// The paper's tail add: every (color sum 0..1024, byte) pair, every (alpha sum, byte)
+    /// pair for alpha sums 0..65536 and every count 0..65536, spare bits kept, invisible rows
+    /// skipped.
+    #[test]
+    fn tail_add4_paper_is_exact_for_every_operand_pair() {
+        let tail =
+            |c: [u64; 3], spare: u64, a: u64, n: u64| c[0] | c[1] << 10 | c[2] << 20 | spare << 30 | a << 32 | n << 48;
+        for s0 in (0..65536u64).step_by(4) {
+            for x in 0..256u32 {
+                let ss = [s0, s0 + 1, s0 + 2, s0 + 3];
+                let cs = ss.map(|s| [s & 1023, (s >> 6) & 1023, (s ^ 1023) & 1023]);
+                let tails: [u64; 4] = core::array::from_fn(|i| tail(cs[i], ss[i] & 3, ss[i], 65535 - ss[i]));
+                let rows = [
+                    row([x, x ^ 0x81, 255 - x], x),
+                    row([255 - x, x, x], 255 - x),
+                    row([x, 0, x], x ^ 0xf0),
+                    row([x; 3], x),
+                ];
+                let got = unpack(tail_add4_paper(pack(tails), pack(rows)));
+                for i in 0..4 {
+                    let r = Row::from_le_u64(rows[i]);
+                    let [cr, cg, cb, t] = r.rgbt().map(u64::from);
+                    let want = if r.is_invisible() {
+                        tails[i]
+                    } else {
+                        let c = cs[i];
+                        tail(
+                            [sat(c[0], cr, 1023), sat(c[1], cg, 1023), sat(c[2], cb, 1023)],
+                            ss[i] & 3,
+                            sat(ss[i], 255 - t, 65535),
+                            sat(65535 - ss[i], 1, 65535),
+                        )
+                    };
+                    assert_eq!(got[i], want, "tail {:#x}, row {:#x}", tails[i], rows[i]);
+                }
+            }
+        }
+    }
+}

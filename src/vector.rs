@@ -1,0 +1,86 @@
+//! The lane traits: what Listing 1 ([`crate::mlab`]) and Listing 2 ([`crate::hybrid`]) are
+//! written over, and their width-1 implementations (one pixel: [`Row`] and the tails), which
+//! are the scalar kernel. The 8-wide implementations are in `lanes/x8.rs`, the only file
+//! that uses `wide`; the float lane trait of the resolve is [`crate::resolve::FloatLanes`].
+
+use crate::arith::Arithmetic;
+use crate::row::Row;
+use crate::tail::TailFormat;
+
+/// Rows of one or more pixels, one pixel per lane: what Listings 1 and 2 are written over.
+pub(crate) trait RowLanes: Copy {
+    /// Per-lane condition.
+    type Mask: Copy + core::ops::BitAnd<Output = Self::Mask>;
+    /// Per-lane HT tail of layout `T`.
+    type Tail<T: TailFormat>: Copy;
+    /// `self.z <= other.z` in IEEE f32 (false when either is NaN).
+    fn depth_le(self, other: Self) -> Self::Mask;
+    /// `if mask { a } else { b }` per lane.
+    fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
+    /// Eq. 7-8 per lane in the arithmetic `A` ([`Arithmetic::merge`]).
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self;
+    /// [`TailFormat::add`] per lane.
+    fn tail_add<T: TailFormat>(tail: Self::Tail<T>, row: Self) -> Self::Tail<T>;
+    /// `if mask { a } else { b }` per lane, for tails.
+    fn select_tail<T: TailFormat>(mask: Self::Mask, a: Self::Tail<T>, b: Self::Tail<T>) -> Self::Tail<T>;
+}
+
+impl RowLanes for Row {
+    type Mask = bool;
+    type Tail<T: TailFormat> = T;
+    #[inline(always)]
+    fn depth_le(self, other: Self) -> bool {
+        self.depth() <= other.depth()
+    }
+    #[inline(always)]
+    fn select(mask: bool, a: Self, b: Self) -> Self {
+        // Branchless (cmov): a data-dependent branch mispredicts on every unsorted stream.
+        Row::from_le_u64(core::hint::select_unpredictable(mask, a.to_le_u64(), b.to_le_u64()))
+    }
+    #[inline(always)]
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
+        A::merge(front, back)
+    }
+    #[inline(always)]
+    fn tail_add<T: TailFormat>(tail: T, row: Self) -> T {
+        let mut t = tail;
+        t.add(row);
+        t
+    }
+    #[inline(always)]
+    fn select_tail<T: TailFormat>(mask: bool, a: T, b: T) -> T {
+        core::hint::select_unpredictable(mask, a, b)
+    }
+}
+
+/// Where the rows of one layer live: Listings 1 and 2 load a layer, update it, and store it
+/// back before the next one, so only one layer and the carried row are ever held in
+/// registers (an array of `M` layers would spill, and copy, at large `M`).
+pub(crate) trait Slot<L> {
+    /// Read the layer.
+    fn load(&self) -> L;
+    /// Write the layer.
+    fn store(&mut self, value: L);
+}
+
+impl Slot<Row> for Row {
+    #[inline(always)]
+    fn load(&self) -> Row {
+        *self
+    }
+    #[inline(always)]
+    fn store(&mut self, value: Row) {
+        *self = value;
+    }
+}
+
+impl<T: TailFormat> Slot<T> for T {
+    #[inline(always)]
+    fn load(&self) -> T {
+        *self
+    }
+    #[inline(always)]
+    fn store(&mut self, value: T) {
+        *self = value;
+    }
+}
