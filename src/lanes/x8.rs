@@ -521,30 +521,45 @@ fn hybrid_resolve_regs<T: TailFormat, const K: usize>(
     crate::resolve::resolve_lanes::<f32x8>(head, sums, alpha, count)
 }
 
-/// [`crate::to_rgba8`] for 8 lanes, one channel: the byte in the low 8 bits of each lane.
-#[cfg(target_endian = "little")]
+/// `x` clamped to `[0, 1]` with NaN to 0, as [`crate::to_rgba8`] clamps: `x > 1 ? 1 : x`,
+/// then `x >= 0 ? x : 0`. On x86 these are exactly `minps(1, x)` then `maxps(x, 0)` (each
+/// returns its second operand when the compare is false, NaN included); elsewhere `wide`'s
+/// min and max differ on NaN between backends, so the selects are written out.
+#[inline(always)]
+fn clamp01(x: f32x8) -> f32x8 {
+    let (zero, one) = (f32x8::ZERO, f32x8::ONE);
+    if cfg!(any(target_arch = "x86", target_arch = "x86_64")) && cfg!(target_feature = "sse") {
+        one.fast_min(x).fast_max(zero)
+    } else {
+        let x = x.simd_gt(one).select(one, x);
+        x.simd_ge(zero).select(x, zero)
+    }
+}
+
+/// [`crate::to_rgba8`] for 8 lanes, one channel: the byte in the low 8 bits of each lane,
+/// the other bits zero (`x * 255 + 0.5` lies in `[0.5, 255.5]`: no mask needed).
 #[inline(always)]
 fn to_unorm8_lanes(x: f32x8) -> u32x8 {
-    let one = f32x8::ONE;
-    let x = x.simd_gt(one).select(one, x);
-    let x = x.simd_ge(f32x8::ZERO).select(x, f32x8::ZERO);
-    let q = x * f32x8::splat(255.0) + f32x8::splat(0.5);
-    cast::<i32x8, u32x8>(q.fast_trunc_int()) & u32x8::splat(0xff)
+    let q = clamp01(x) * f32x8::splat(255.0) + f32x8::splat(0.5);
+    cast::<i32x8, u32x8>(q.fast_trunc_int())
 }
 
 /// [`crate::to_rgba8`] of [`Resolved::pixel`] for 8 lanes; the output keeps the lane order.
+/// Over an opaque background the alpha byte is the constant 255 (`to_rgba8` of 1).
 #[inline(always)]
 fn rgba8_lanes(c: [f32x8; 3], t: f32x8, background: Background) -> [[u8; 4]; LANES] {
-    let rgba: [f32x8; 4] = match background {
+    let packed = match background {
         Background::Opaque(bg) => {
             let bg = bg.to_array().map(f32x8::splat);
-            [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t, f32x8::ONE]
+            let q: [u32x8; 3] = core::array::from_fn(|i| to_unorm8_lanes(c[i] + bg[i] * t));
+            q[0] | (q[1] << 8) | (q[2] << 16) | u32x8::splat(0xff00_0000)
         }
-        Background::Transparent => [c[0], c[1], c[2], f32x8::ONE - t],
+        Background::Transparent => {
+            let q = [c[0], c[1], c[2], f32x8::ONE - t].map(to_unorm8_lanes);
+            q[0] | (q[1] << 8) | (q[2] << 16) | (q[3] << 24)
+        }
     };
-    let q = rgba.map(to_unorm8_lanes);
-    let packed: [u32; LANES] = cast(q[0] | (q[1] << 8) | (q[2] << 16) | (q[3] << 24));
-    packed.map(u32::to_le_bytes)
+    cast::<u32x8, [u32; LANES]>(packed).map(u32::to_le_bytes)
 }
 
 /// A resolve of 8 pixels in registers, pixels in [`POSITION`] order.
@@ -677,6 +692,52 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The lane writer against the scalar one ([`crate::to_rgba8`]) for every f32 whose bits
+    /// are a multiple of 509 (8.4 M values spread over the whole bit range: NaNs, infinities,
+    /// negatives, subnormals), every f32 in `[0, 1]` within 64 ulps of a rounding boundary
+    /// `(k + 0.5) / 255`, and the special values; over both backgrounds' alpha paths.
+    #[test]
+    fn unorm8_writer_matches_the_scalar_writer() {
+        let scalar = |x: f32| crate::to_rgba8(glam::Vec4::splat(x))[0] as u32;
+        let check = |xs: [f32; 8]| {
+            let got = to_unorm8_lanes(f32x8::new(xs)).to_array();
+            for (x, g) in xs.iter().zip(got) {
+                assert_eq!(g, scalar(*x), "x = {x:e} ({:#x})", x.to_bits());
+            }
+        };
+        let mut batch = |bits: &mut dyn Iterator<Item = u32>| {
+            let mut xs = [0.0f32; 8];
+            let mut n = 0;
+            for b in bits {
+                xs[n] = f32::from_bits(b);
+                n += 1;
+                if n == 8 {
+                    check(xs);
+                    n = 0;
+                }
+            }
+            if n > 0 {
+                check(xs);
+            }
+        };
+        batch(&mut (0..=u32::MAX / 509).map(|i| i * 509));
+        for k in 0..255u32 {
+            let b = ((k as f32 + 0.5) / 255.0).to_bits();
+            batch(&mut (b - 64..b + 64));
+        }
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            f32::NAN,
+            -f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::MIN_POSITIVE,
+        ];
+        batch(&mut specials.iter().map(|x| x.to_bits()));
     }
 
     /// `min(s + x, max)`.
