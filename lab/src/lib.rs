@@ -12,6 +12,9 @@
 //!   arithmetics, HT tail sums and saturation.
 //! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.
 //! - [`report`]: the whole evaluation of one stream.
+//! - [`stability`]: `oit-lab stability`, every scene in several primitive orders and seeds:
+//!   spreads of the quality and the change between orders.
+//! - [`font`]: the 5x7 bitmap font of the figures' labels.
 //! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.
 //! - [`tiled`]: whole frames on every core: primitives binned into bands and rasterized
 //!   straight into each method's target (`rayon`), MLAB and the baselines.
@@ -21,10 +24,12 @@
 pub mod bench;
 pub mod dump;
 pub mod faint;
+pub mod font;
 pub mod methods;
 pub mod metrics;
 pub mod picture;
 pub mod report;
 pub mod scenes;
+pub mod stability;
 pub mod stream;
 pub mod tiled;

@@ -80,6 +80,67 @@ impl Picture {
         }
     }
 
+    /// Fill the rectangle at `(x, y)` of size `w x h` (clipped) with `rgb`.
+    pub fn fill_rect(&mut self, x: u32, y: u32, w: u32, h: u32, rgb: [u8; 3]) {
+        for yy in y..(y.saturating_add(h)).min(self.height) {
+            for xx in x..(x.saturating_add(w)).min(self.width) {
+                let i = ((yy * self.width + xx) * 3) as usize;
+                self.data[i..i + 3].copy_from_slice(&rgb);
+            }
+        }
+    }
+
+    /// A 1-pixel outline of the rectangle at `(x, y)` of size `w x h` (clipped).
+    pub fn outline(&mut self, x: u32, y: u32, w: u32, h: u32, rgb: [u8; 3]) {
+        if w == 0 || h == 0 {
+            return;
+        }
+        self.fill_rect(x, y, w, 1, rgb);
+        self.fill_rect(x, y + h - 1, w, 1, rgb);
+        self.fill_rect(x, y, 1, h, rgb);
+        self.fill_rect(x + w - 1, y, 1, h, rgb);
+    }
+
+    /// The `w x h` part at `(x, y)` (clipped to the picture).
+    pub fn crop(&self, x: u32, y: u32, w: u32, h: u32) -> Picture {
+        let (w, h) = (
+            w.min(self.width.saturating_sub(x)),
+            h.min(self.height.saturating_sub(y)),
+        );
+        let mut out = Picture::filled(w, h, [0; 3]);
+        for yy in 0..h {
+            let s0 = (((y + yy) * self.width + x) * 3) as usize;
+            let d0 = (yy * w * 3) as usize;
+            out.data[d0..d0 + (w * 3) as usize].copy_from_slice(&self.data[s0..s0 + (w * 3) as usize]);
+        }
+        out
+    }
+
+    /// Enlarged by an integer factor, each pixel a square (nearest neighbour: what a zoom shows).
+    pub fn upscale(&self, f: u32) -> Picture {
+        let f = f.max(1);
+        let mut out = Picture::filled(self.width * f, self.height * f, [0; 3]);
+        for y in 0..out.height {
+            for x in 0..out.width {
+                let s = (((y / f) * self.width + x / f) * 3) as usize;
+                let d = ((y * out.width + x) * 3) as usize;
+                out.data[d..d + 3].copy_from_slice(&self.data[s..s + 3]);
+            }
+        }
+        out
+    }
+
+    /// Values in `[0, 1]` (row major) through nv-flip's magma color map (what FLIP's error
+    /// maps use).
+    pub fn magma(width: u32, height: u32, values: &[f32]) -> Picture {
+        let map = nv_flip::FlipImageFloat::with_data(width, height, values);
+        Picture {
+            width,
+            height,
+            data: map.apply_color_lut(&nv_flip::magma_lut()).to_vec(),
+        }
+    }
+
     /// Copy `src` with its top-left corner at `(x, y)` (clipped).
     pub fn blit(&mut self, src: &Picture, x: u32, y: u32) {
         for sy in 0..src.height.min(self.height.saturating_sub(y)) {

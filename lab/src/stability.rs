@@ -1,0 +1,589 @@
+//! `oit-lab stability` (issue 10): how much each method's image depends on the order in which
+//! the same primitives are submitted, and how its quality spreads over orders and scene seeds.
+//!
+//! Every scene is built from each seed, then submitted in several primitive orders: order 0 is
+//! the scene's own order (HAIR strand by strand root to tip, FOREST tree by tree, ...), orders
+//! 1, 2, ... are seeded Fisher-Yates shuffles of the primitive list ([`order`]). Each order is
+//! rasterized to a fragment stream and every method composites it; each image is scored
+//! against the A-buffer of the same order on the covered pixels, and compared with the same
+//! method's image of the previous order ([`Change`]: share of covered pixels whose displayed
+//! 8-bit sRGB value moves by more than 2 levels, mean FLIP between the two). Per pixel, the
+//! spread of the displayed values over all orders is kept too.
+//!
+//! HT is order independent by construction (its head keeps the nearest K fragments, its tail
+//! sums are integers), and so is MLAB when it has at least as many rows as a pixel has
+//! fragments (no merge happens): both come out with zero change (tests/stability.rs).
+
+use crate::faint::{Depth, depth, spread};
+use crate::methods::{Frame, HT_SIZES, Image, MLAB_SIZES, Method, Weight};
+use crate::metrics::{Change, Scorer, change, srgb8};
+use crate::scenes::{Primitives, Rng, Scene};
+use std::sync::Mutex;
+
+/// The primitives of `prims` in submission order number `order`: order 0 is the list as
+/// built, any other order a Fisher-Yates shuffle seeded from the scene seed and the order.
+pub fn order(prims: &Primitives, seed: u64, order: usize) -> Primitives {
+    let mut p = prims.clone();
+    if order > 0 {
+        let mut rng = Rng::new(
+            seed.wrapping_mul(0xd1b5_4a32_d192_ed03) ^ (order as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ 0x5851_f42d,
+        );
+        rng.shuffle(&mut p.prims);
+    }
+    p
+}
+
+/// The methods of a stability run: the A-buffer itself (its change between orders is 0 unless
+/// two fragments of a pixel share a depth), unsorted OVER, MLAB at every row count the lab
+/// has, HT at every head size, AT 4, WBOIT eq. 7 and Meshkin.
+pub fn methods() -> Vec<Method> {
+    let mut v = vec![Method::Reference, Method::Over];
+    v.extend(MLAB_SIZES.map(Method::Mlab));
+    v.extend(HT_SIZES.map(Method::Hybrid));
+    v.push(Method::Adaptive(4));
+    v.push(Method::Wboit(Weight::Eq7));
+    v.push(Method::Meshkin);
+    v
+}
+
+/// The methods of the printed stability table (the others are in the recommendation).
+pub fn table_methods() -> Vec<Method> {
+    let mut v = vec![Method::Reference, Method::Over];
+    v.extend([1, 2, 4, 8, 16].map(Method::Mlab));
+    v.extend([0, 1, 3, 7].map(Method::Hybrid));
+    v.push(Method::Adaptive(4));
+    v.push(Method::Wboit(Weight::Eq7));
+    v.push(Method::Meshkin);
+    v
+}
+
+/// What a run does.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// Frame size.
+    pub size: (u32, u32),
+    /// Scene seeds.
+    pub seeds: Vec<u64>,
+    /// Number of orders per seed (order 0 and `orders - 1` shuffles).
+    pub orders: usize,
+    /// Methods (see [`methods`]); `Method::Reference` may be among them.
+    pub methods: Vec<Method>,
+    /// Compute FLIP (against the reference and between orders).
+    pub with_flip: bool,
+    /// The methods whose change between orders gets a FLIP too (FLIP is the costly part of a
+    /// run; the others get the 8-bit change only).
+    pub pair_flip: Vec<Method>,
+    /// The method of the strip image, and how many orders it shows (of the first seed).
+    pub strip: Option<(Method, usize)>,
+}
+
+/// One image's scores against the reference of the same order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Scene seed.
+    pub seed: u64,
+    /// Order number.
+    pub order: usize,
+    /// PSNR over covered pixels, dB.
+    pub psnr: f64,
+    /// Whole-image PSNR, dB.
+    pub psnr_whole: f64,
+    /// Mean FLIP over covered pixels (NaN when not computed).
+    pub flip: f64,
+    /// Mean SSIM over covered pixels.
+    pub ssim: f64,
+}
+
+/// One method over every seed and order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MethodRun {
+    /// The method.
+    pub method: Method,
+    /// Bytes per pixel.
+    pub bytes: f64,
+    /// One sample per seed and order.
+    pub samples: Vec<Sample>,
+    /// The change between consecutive orders (order `i` against `i + 1`) of each seed.
+    pub pairs: Vec<Change>,
+    /// Per seed: share of the covered pixels whose displayed 8-bit value (any channel) spreads
+    /// by more than 2 levels over all the seed's orders.
+    pub spread_share: Vec<f64>,
+    /// Largest spread of a displayed 8-bit channel over one seed's orders, in levels.
+    pub spread_max: u8,
+    /// Every order of every seed gave the same image, bit for bit.
+    pub identical: bool,
+}
+
+/// The strip image's data: the method's images of the first orders of the first seed, and the
+/// per-pixel spread (8-bit levels, largest channel) over all orders of that seed.
+#[derive(Clone, Debug)]
+pub struct Strip {
+    /// The method.
+    pub method: Method,
+    /// `(order, image)`.
+    pub images: Vec<(usize, Image)>,
+    /// Spread in levels per pixel.
+    pub spread: Vec<u8>,
+    /// Covered pixels.
+    pub covered: Vec<bool>,
+    /// Number of orders the spread is over.
+    pub orders: usize,
+}
+
+/// A scene over every seed and order.
+#[derive(Clone, Debug)]
+pub struct SceneStability {
+    /// The scene.
+    pub scene: Scene,
+    /// Fragments per covered pixel, per seed.
+    pub depth: Vec<Depth>,
+    /// Fragments per seed.
+    pub fragments: Vec<usize>,
+    /// One entry per method of the plan, in order.
+    pub runs: Vec<MethodRun>,
+    /// The strip, when asked.
+    pub strip: Option<Strip>,
+}
+
+/// A method's image and scores in one order, or why it could not be rendered.
+type Rendered = Option<Result<(Image, Sample), String>>;
+
+/// Per method and seed: the previous order's image, and the running min and max of the
+/// displayed 8-bit values per pixel and channel.
+struct Track {
+    prev: Option<Image>,
+    lo: Vec<[u8; 3]>,
+    hi: Vec<[u8; 3]>,
+}
+
+/// Run `plan` on `scene`. `progress` is called after each order with `(seed, order)`.
+pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)) -> Result<SceneStability, String> {
+    let (w, h) = plan.size;
+    let n = w as usize * h as usize;
+    let mut runs: Vec<MethodRun> = plan
+        .methods
+        .iter()
+        .map(|&m| MethodRun {
+            method: m,
+            bytes: 0.0,
+            samples: Vec::new(),
+            pairs: Vec::new(),
+            spread_share: Vec::new(),
+            spread_max: 0,
+            identical: true,
+        })
+        .collect();
+    let mut depths = Vec::new();
+    let mut fragments = Vec::new();
+    let mut strip = None;
+    for (si, &seed) in plan.seeds.iter().enumerate() {
+        let built = scene.primitives(w, h, seed);
+        let mut tracks: Vec<Track> = plan
+            .methods
+            .iter()
+            .map(|_| Track {
+                prev: None,
+                lo: vec![[255; 3]; n],
+                hi: vec![[0; 3]; n],
+            })
+            .collect();
+        let mut covered = Vec::new();
+        let mut strip_images = Vec::new();
+        for o in 0..plan.orders.max(1) {
+            let stream = order(&built, seed, o).stream();
+            stream
+                .validate()
+                .map_err(|(i, e)| format!("{} seed {seed} order {o}: fragment {i}: {e}", scene.name()))?;
+            let frame = Frame::new(&stream);
+            if o == 0 {
+                covered = frame.bins.start.windows(2).map(|x| x[1] > x[0]).collect();
+                depths.push(depth(&frame));
+                fragments.push(stream.frags.len());
+            }
+            let reference = Method::Reference.render(&frame)?;
+            let scorer = Scorer::new(&reference, &covered);
+            // Render and score every method, on all cores (the kernel methods are single
+            // threaded), then fold the images into the tracks in method order.
+            let queue = Mutex::new((0..plan.methods.len()).rev().collect::<Vec<_>>());
+            let results: Mutex<Vec<Rendered>> = Mutex::new(vec![None; plan.methods.len()]);
+            let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
+            std::thread::scope(|s| {
+                for _ in 0..threads.min(plan.methods.len()) {
+                    s.spawn(|| {
+                        while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
+                            let m = plan.methods[i];
+                            let r = (if m == Method::Reference {
+                                Ok(reference.clone())
+                            } else {
+                                m.render(&frame)
+                            })
+                            .map(|img| {
+                                let q = scorer.score(&img, plan.with_flip);
+                                let sample = Sample {
+                                    seed,
+                                    order: o,
+                                    psnr: q.covered.psnr,
+                                    psnr_whole: q.whole.psnr,
+                                    flip: q.flip_covered.unwrap_or(f64::NAN),
+                                    ssim: q.ssim_covered,
+                                };
+                                (img, sample)
+                            });
+                            if let Ok(mut out) = results.lock() {
+                                out[i] = Some(r);
+                            }
+                        }
+                    });
+                }
+            });
+            let results = results
+                .into_inner()
+                .map_err(|_| "a rendering thread failed".to_string())?;
+            // Changes against the previous order, on all cores too (FLIP per pair).
+            let mut images = Vec::with_capacity(results.len());
+            for (i, r) in results.into_iter().enumerate() {
+                let (img, sample) = r.ok_or("a rendering thread failed")??;
+                runs[i].samples.push(sample);
+                runs[i].bytes = plan.methods[i].bytes_per_pixel(&frame);
+                images.push(img);
+            }
+            let changes: Mutex<Vec<Option<Change>>> = Mutex::new(vec![None; images.len()]);
+            let queue = Mutex::new((0..images.len()).rev().collect::<Vec<_>>());
+            std::thread::scope(|s| {
+                for _ in 0..threads.min(images.len()) {
+                    s.spawn(|| {
+                        while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
+                            if let Some(prev) = &tracks[i].prev {
+                                let flip = plan.with_flip && plan.pair_flip.contains(&plan.methods[i]);
+                                let c = change(prev, &images[i], &covered, flip);
+                                if let Ok(mut out) = changes.lock() {
+                                    out[i] = Some(c);
+                                }
+                            }
+                        }
+                    });
+                }
+            });
+            let changes = changes
+                .into_inner()
+                .map_err(|_| "a comparing thread failed".to_string())?;
+            for (i, img) in images.into_iter().enumerate() {
+                let t = &mut tracks[i];
+                if let Some(c) = changes[i] {
+                    runs[i].pairs.push(c);
+                }
+                if let Some(prev) = &t.prev {
+                    runs[i].identical &= *prev == img;
+                }
+                for ((px, lo), hi) in img.rgb.iter().zip(t.lo.iter_mut()).zip(t.hi.iter_mut()) {
+                    for ((&c, l), h) in px.iter().zip(lo.iter_mut()).zip(hi.iter_mut()) {
+                        let v = srgb8(c);
+                        *l = (*l).min(v);
+                        *h = (*h).max(v);
+                    }
+                }
+                if let Some((m, count)) = plan.strip
+                    && si == 0
+                    && m == plan.methods[i]
+                    && o < count
+                {
+                    strip_images.push((o, img.clone()));
+                }
+                t.prev = Some(img);
+            }
+            progress(seed, o);
+        }
+        for (i, t) in tracks.iter().enumerate() {
+            let levels: Vec<u8> = (0..n)
+                .map(|p| (0..3).map(|k| t.hi[p][k].saturating_sub(t.lo[p][k])).max().unwrap_or(0))
+                .collect();
+            let (mut cov, mut moved) = (0usize, 0usize);
+            for p in (0..n).filter(|&p| covered[p]) {
+                cov += 1;
+                moved += usize::from(levels[p] > crate::metrics::CHANGE_LEVELS);
+                runs[i].spread_max = runs[i].spread_max.max(levels[p]);
+            }
+            runs[i]
+                .spread_share
+                .push(if cov > 0 { moved as f64 / cov as f64 } else { 0.0 });
+            if let Some((m, _)) = plan.strip
+                && si == 0
+                && m == plan.methods[i]
+            {
+                strip = Some(Strip {
+                    method: m,
+                    images: std::mem::take(&mut strip_images),
+                    spread: levels,
+                    covered: covered.clone(),
+                    orders: plan.orders.max(1),
+                });
+            }
+        }
+    }
+    Ok(SceneStability {
+        scene,
+        depth: depths,
+        fragments,
+        runs,
+        strip,
+    })
+}
+
+/// Median of the values that are not NaN (the mean of the middle two for an even count);
+/// NaN when there is none.
+pub fn median(values: &[f64]) -> f64 {
+    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+fn min_med_max(values: &[f64], digits: usize) -> String {
+    let v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
+    if v.is_empty() {
+        return "-".into();
+    }
+    let f = |x: f64| {
+        if x.is_infinite() {
+            "inf".to_string()
+        } else {
+            format!("{x:.digits$}")
+        }
+    };
+    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    format!("{} / {} / {}", f(lo), f(median(&v)), f(hi))
+}
+
+/// Per seed, the range (max - min) of the covered PSNR over the seed's orders; infinite
+/// values (an exact image) count as the largest finite one plus nothing: a seed whose orders
+/// are all exact has range 0, one mixing exact and inexact images has an infinite range.
+fn order_ranges(run: &MethodRun) -> Vec<f64> {
+    let mut seeds: Vec<u64> = run.samples.iter().map(|s| s.seed).collect();
+    seeds.dedup();
+    seeds
+        .iter()
+        .map(|&seed| {
+            let v: Vec<f64> = run.samples.iter().filter(|s| s.seed == seed).map(|s| s.psnr).collect();
+            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if lo == hi { 0.0 } else { hi - lo }
+        })
+        .collect()
+}
+
+/// Median of the covered PSNR of order 0 (the scene's own order) and of the shuffled orders,
+/// over every seed: how much MLAB draws on the coherence of the scene's own order.
+pub fn own_vs_shuffled(run: &MethodRun) -> (f64, f64) {
+    let own: Vec<f64> = run.samples.iter().filter(|s| s.order == 0).map(|s| s.psnr).collect();
+    let shuffled: Vec<f64> = run.samples.iter().filter(|s| s.order > 0).map(|s| s.psnr).collect();
+    (median(&own), median(&shuffled))
+}
+
+/// The stability table: per scene and method (those of `shown`), covered PSNR and FLIP min /
+/// median / max over every seed and order, the median over seeds of the PSNR range over
+/// orders, the change between consecutive orders, and the per-pixel spread over all orders.
+pub fn table(scenes: &[SceneStability], shown: &[Method]) -> String {
+    let mut s = String::from(
+        "| scene | method | B/px | PSNR covered dB: min / median / max | PSNR range over orders dB (median [max] over seeds) | own order / shuffled: median PSNR dB | FLIP covered: min / median / max | between consecutive orders: FLIP covered, median [max] | px changing > 2/255 between consecutive orders: median [max] | px spreading > 2/255 over all orders (median over seeds) | largest spread (levels) | bit-identical over orders |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
+    );
+    for sc in scenes {
+        for run in sc.runs.iter().filter(|r| shown.contains(&r.method)) {
+            let psnr: Vec<f64> = run.samples.iter().map(|x| x.psnr).collect();
+            let flip: Vec<f64> = run.samples.iter().map(|x| x.flip).collect();
+            let ranges = order_ranges(run);
+            let pair_flip: Vec<f64> = run.pairs.iter().map(|c| c.flip.unwrap_or(f64::NAN)).collect();
+            let pair_share: Vec<f64> = run.pairs.iter().map(|c| 100.0 * c.share).collect();
+            let (own, shuf) = own_vs_shuffled(run);
+            let max = |v: &[f64]| v.iter().copied().filter(|x| !x.is_nan()).fold(f64::NAN, f64::max);
+            let num = |x: f64, d: usize| {
+                if x.is_nan() {
+                    "-".to_string()
+                } else if x.is_infinite() {
+                    "inf".to_string()
+                } else {
+                    format!("{x:.d$}")
+                }
+            };
+            s += &format!(
+                "| {} | {} | {:.0} | {} | {} [{}] | {} / {} | {} | {} [{}] | {} % [{} %] | {} % | {} | {} |\n",
+                sc.scene.name(),
+                run.method.name(),
+                run.bytes,
+                min_med_max(&psnr, 1),
+                num(median(&ranges), 1),
+                num(max(&ranges), 1),
+                num(own, 1),
+                num(shuf, 1),
+                min_med_max(&flip, 3),
+                num(median(&pair_flip), 4),
+                num(max(&pair_flip), 4),
+                num(median(&pair_share), 1),
+                num(max(&pair_share), 1),
+                num(100.0 * median(&run.spread_share), 1),
+                run.spread_max,
+                if run.identical { "yes" } else { "no" }
+            );
+        }
+    }
+    s += &format!(
+        "\nSamples: every seed x order; covered: pixels with at least one fragment; a pixel \
+         changes when a displayed 8-bit sRGB channel moves by more than 2 levels. {}\n",
+        crate::report::HT_NOTE
+    );
+    s
+}
+
+/// The recommendation targets of issue 10: PSNR on covered pixels at least this...
+pub const TARGET_PSNR: f64 = 40.0;
+/// ... and mean FLIP on covered pixels at most this, both at the median over seeds and orders.
+pub const TARGET_FLIP: f64 = 0.02;
+
+/// The paper's MLAB configurations (Table 1, 1280x720: 14.1 MB = 2 rows, 28.2 MB = 4 rows;
+/// the larger of its two tested configurations in parentheses), for comparison.
+pub fn paper_choice(scene: Scene) -> Option<&'static str> {
+    match scene {
+        Scene::Hair => Some("MLAB 4 (8)"),
+        Scene::Particles | Scene::Forest | Scene::Teapots => Some("MLAB 2 (4)"),
+        _ => None,
+    }
+}
+
+/// The smallest method among `candidates` (in order) whose median covered PSNR and FLIP over
+/// every seed and order meet the targets, with those medians.
+pub fn smallest<'a>(runs: &'a [MethodRun], candidates: &[Method]) -> Option<(&'a MethodRun, f64, f64)> {
+    candidates.iter().find_map(|m| {
+        let run = runs.iter().find(|r| r.method == *m)?;
+        let psnr = median(&run.samples.iter().map(|x| x.psnr).collect::<Vec<_>>());
+        let flip = median(&run.samples.iter().map(|x| x.flip).collect::<Vec<_>>());
+        (psnr >= TARGET_PSNR && flip <= TARGET_FLIP).then_some((run, psnr, flip))
+    })
+}
+
+/// The per-scene recommendation: the smallest MLAB M and HT K reaching the targets at the
+/// median over seeds and orders (FLIP needs `with_flip`).
+pub fn recommendation_table(scenes: &[SceneStability]) -> String {
+    let mut s = String::from(
+        "| scene | frags / covered px: mean (median over seeds); max | smallest MLAB M | its median PSNR dB / FLIP (covered) | smallest HT K (paper's HT K+1) | its median PSNR dB / FLIP (covered) | paper's choice (Table 1) |\n\
+         |---|---:|---:|---:|---:|---:|---|\n",
+    );
+    let mlab: Vec<Method> = MLAB_SIZES.map(Method::Mlab).to_vec();
+    let ht: Vec<Method> = HT_SIZES.map(Method::Hybrid).to_vec();
+    for sc in scenes {
+        let means: Vec<f64> = sc.depth.iter().map(|d| d.mean).collect();
+        let max = sc.depth.iter().map(|d| d.max).max().unwrap_or(0);
+        s += &format!("| {} | {}; {max} |", sc.scene.name(), spread(&means, 1, false));
+        let biggest = |c: &[Method]| {
+            c.iter()
+                .rev()
+                .find(|m| sc.runs.iter().any(|r| r.method == **m))
+                .copied()
+        };
+        match smallest(&sc.runs, &mlab) {
+            Some((r, p, f)) => s += &format!(" {} ({:.0} B/px) | {p:.1} / {f:.3} |", r.method.name(), r.bytes),
+            None => s += &format!(" none up to {} | - |", biggest(&mlab).map_or("-".into(), |m| m.name())),
+        }
+        match smallest(&sc.runs, &ht) {
+            Some((r, p, f)) => {
+                let k = match r.method {
+                    Method::Hybrid(k) => k,
+                    _ => 0,
+                };
+                s += &format!(
+                    " {} (HT {}, {:.0} B/px) | {p:.1} / {f:.3} |",
+                    r.method.name(),
+                    k + 1,
+                    r.bytes
+                )
+            }
+            None => s += &format!(" none up to {} | - |", biggest(&ht).map_or("-".into(), |m| m.name())),
+        }
+        s += &format!(" {} |\n", paper_choice(sc.scene).unwrap_or("-"));
+    }
+    s += &format!(
+        "\nTargets: PSNR >= {TARGET_PSNR} dB and mean FLIP <= {TARGET_FLIP} on covered pixels, both at the median \
+         over every seed and order. MLAB M in {MLAB_SIZES:?}, HT K in {HT_SIZES:?}. {}\n",
+        crate::report::HT_NOTE
+    );
+    s
+}
+
+/// Spread levels at which the strip's heat map saturates.
+pub const STRIP_SPREAD_LEVELS: u8 = 16;
+
+/// The strip image of a scene: the strip method's images in the first orders of the first
+/// seed, side by side at full size, then the per-pixel spread over all that seed's orders as a
+/// heat map (nv-flip's magma, 0 to [`STRIP_SPREAD_LEVELS`] levels of the displayed 8-bit sRGB
+/// value, largest channel; uncovered pixels grey), each labelled.
+pub fn strip_picture(scene: Scene, seed: u64, strip: &Strip) -> crate::picture::Picture {
+    use crate::font::{LINE, draw_text};
+    use crate::picture::Picture;
+    let Some((_, first)) = strip.images.first() else {
+        return Picture::filled(1, 1, [255; 3]);
+    };
+    let (w, h) = (first.width, first.height);
+    let (gap, scale) = (4u32, 2u32);
+    let line = LINE * scale;
+    let cols = strip.images.len() as u32 + 1;
+    let width = cols * (w + gap) + gap;
+    let height = gap + line + gap + h + gap + 2 * line + gap;
+    let mut out = Picture::filled(width, height, [255; 3]);
+    let black = [0; 3];
+    draw_text(
+        &mut out,
+        gap,
+        gap,
+        &format!(
+            "{}, seed {seed}: {} in {} of {} primitive orders; right: per-pixel spread over all {}",
+            scene.name(),
+            strip.method.name(),
+            strip.images.len(),
+            strip.orders,
+            strip.orders
+        ),
+        scale,
+        black,
+    );
+    let y = gap + line + gap;
+    for (i, (o, img)) in strip.images.iter().enumerate() {
+        let x = gap + i as u32 * (w + gap);
+        out.blit(&Picture::from_image(img), x, y);
+        let label = if *o == 0 {
+            "order 0: the scene's own".to_string()
+        } else {
+            format!("order {o}: shuffle")
+        };
+        draw_text(&mut out, x, y + h + 4, &label, scale, black);
+    }
+    let values: Vec<f32> = strip
+        .spread
+        .iter()
+        .map(|&l| l.min(STRIP_SPREAD_LEVELS) as f32 / STRIP_SPREAD_LEVELS as f32)
+        .collect();
+    let mut heat = Picture::magma(w, h, &values);
+    for (p, &c) in strip.covered.iter().enumerate() {
+        if !c {
+            heat.data[p * 3..p * 3 + 3].copy_from_slice(&[96; 3]);
+        }
+    }
+    let x = gap + (cols - 1) * (w + gap);
+    out.blit(&heat, x, y);
+    draw_text(
+        &mut out,
+        x,
+        y + h + 4,
+        &format!("spread 0-{STRIP_SPREAD_LEVELS} levels"),
+        scale,
+        black,
+    );
+    draw_text(&mut out, x, y + h + 4 + line, "grey: no fragment", scale, black);
+    out
+}
