@@ -33,7 +33,8 @@ pub struct Image {
     pub height: u32,
     /// Linear RGB, row major.
     pub rgb: Vec<[f32; 3]>,
-    /// Background visibility in `[0, 1]`.
+    /// Background visibility in `[0, 1]` (Meshkin's is `1 - sum(alpha)`, negative past full
+    /// opacity).
     pub vis: Vec<f32>,
 }
 
@@ -756,8 +757,12 @@ fn bavoil_myers(frame: &Frame) -> Image {
     })
 }
 
-/// Meshkin (seed 003), the order-independent first-order terms of the expanded OVER:
-/// `C = sum(a * C) + bg * max(0, 1 - sum(a))`, sums in half.
+/// Meshkin (seed 003) as its "Simpler is better" slide writes it (lines 219-229):
+/// `FinalColor = D0 + sum(A_n C_n) - D0 sum(A_n)`, that is `sum(a c) + bg (1 - sum(a))` with
+/// `c` premultiplied; the sums in an RGBA16F target (line 320: "Use 16 bits per component"),
+/// the final pass in f32. There is no clamp: once `sum(a)` passes 1 the background term goes
+/// negative and the image darkens (seed 003, line 278: "Completely inaccurate with higher
+/// alpha values"); the visibility returned is `1 - sum(a)`, negative then too.
 fn meshkin(frame: &Frame) -> Image {
     let (frags, bg) = (&frame.stream.frags, frame.bg());
     per_pixel(frame, |p| {
@@ -769,46 +774,75 @@ fn meshkin(frame: &Frame) -> Image {
             }
             acc[3] = f16r(acc[3] + f.alpha);
         }
-        let t = (1.0 - acc[3]).max(0.0);
+        let t = 1.0 - acc[3];
         (std::array::from_fn(|k| finite_or_zero(acc[k] + bg[k] * t)), t)
     })
 }
 
 /// Adaptive Transparency's visibility function: nodes `(z, T)` sorted front to back, where
-/// `T` is the visibility just behind `z`.
+/// `T` is the visibility just behind `z` (seed 002: "a sorted (front-to-back) sequence of
+/// nodes stored into a fixed-size array", the first node `(0, 1)` implicit).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Visibility {
     /// The nodes, front to back.
     pub nodes: Vec<(f32, f32)>,
 }
 
+/// The first node AT may remove when it keeps `n` nodes: Intel's published AOIT code
+/// protects the front half of the nodes from removal when `n >= 8` ("to bias our compression
+/// scheme in order to favor the closest nodes to the eye we skip the first 50%"), and
+/// otherwise only node 0.
+///
+/// Source: GameTechDev/AOIT-Update, `OIT_DX11/AOIT Technique/DXAOIT.hlsl` (commit 7a637f28,
+/// the two-pass AT of the sample: fragment lists, then a visibility function per pixel),
+/// lines 24-27 (`AOIT_DONT_COMPRESS_FIRST_HALF` for `OIT_NODE_COUNT >= 8`) and 219-225
+/// (`startRemovalIdx = removalCandidateCount / 2`, else 1, with `removalCandidateCount = N`).
+/// The sample builds only multiples of 4 nodes (`OIT_RT_COUNT = N / 4`, line 20); AT 1 and
+/// AT 2 here follow the same rule (start at node 1).
+pub fn at_first_removable(n: usize) -> usize {
+    if n >= 8 { n / 2 } else { 1 }
+}
+
 impl Visibility {
-    /// Insert a fragment of alpha `a` at depth `z` (in front of nodes at equal depth),
-    /// attenuate every node behind it, and while there are more than `n` nodes remove the
-    /// node `i >= 1` with the smallest area variation `(z_i - z_(i-1)) * (T_(i-1) - T_i)`:
-    /// node `i - 1` takes `T_i` (visibility is underestimated, never overestimated).
+    /// Insert a fragment of alpha `a` at depth `z` and compress, as the published AOIT code
+    /// does (DXAOIT.hlsl `AOITInsertFragment`, lines 173-267; see [`at_first_removable`]):
+    ///
+    /// - every fragment is inserted, alpha 0 included (a purely additive one makes a node
+    ///   that keeps the visibility of the node in front), in front of the nodes at its depth
+    ///   (`fragmentDepth <= depth[i]` ends the search, lines 145-163); the nodes behind it
+    ///   are attenuated by `1 - a` (lines 196-211);
+    /// - with `n + 1` nodes (line 214), the node `i` in `at_first_removable(n)..n` with the
+    ///   smallest area variation `(z_i - z_(i-1)) * (T_(i-1) - T_i)` is removed, the front
+    ///   one on ties (lines 217-245): the last node, the farthest, is never a candidate;
+    /// - node `i - 1` takes `T_i` and node `i` goes (lines 247-257): visibility is
+    ///   underestimated, never overestimated.
     pub fn insert(&mut self, z: f32, a: f32, n: usize) {
-        if a <= 0.0 {
-            return;
-        }
+        let n = n.max(1);
         let pos = self
             .nodes
             .iter()
             .position(|&(nz, _)| nz >= z)
             .unwrap_or(self.nodes.len());
         let before = if pos == 0 { 1.0 } else { self.nodes[pos - 1].1 };
-        self.nodes.insert(pos, (z, before * (1.0 - a)));
+        let t = 1.0 - a;
+        self.nodes.insert(pos, (z, t * before));
         for node in &mut self.nodes[pos + 1..] {
-            node.1 *= 1.0 - a;
+            node.1 *= t;
         }
-        while self.nodes.len() > n.max(1) {
-            let mut best = 1;
-            let mut best_area = f32::INFINITY;
-            for i in 1..self.nodes.len() {
-                let area = (self.nodes[i].0 - self.nodes[i - 1].0) * (self.nodes[i - 1].1 - self.nodes[i].1);
-                if area < best_area {
-                    best_area = area;
-                    best = i;
+        while self.nodes.len() > n {
+            let last = self.nodes.len() - 1;
+            let area = |i: usize| (self.nodes[i].0 - self.nodes[i - 1].0) * (self.nodes[i - 1].1 - self.nodes[i].1);
+            // The sample starts from the first candidate and keeps it unless a later one is
+            // strictly smaller (with one node, no candidate: node 1, the last, goes).
+            let mut best = at_first_removable(n);
+            if best < last {
+                let mut best_area = area(best);
+                for i in best + 1..last {
+                    let ai = area(i);
+                    if ai < best_area {
+                        best_area = ai;
+                        best = i;
+                    }
                 }
             }
             self.nodes[best - 1].1 = self.nodes[best].1;
@@ -816,7 +850,8 @@ impl Visibility {
         }
     }
 
-    /// Visibility at depth `z`: `T` of the last node strictly in front of `z`, else 1.
+    /// Visibility at depth `z`: `T` of the last node strictly in front of `z`, else 1 (the
+    /// published resolve, DX_Resolve.hlsl lines 62-63).
     pub fn at(&self, z: f32) -> f32 {
         self.nodes
             .iter()
@@ -831,8 +866,12 @@ impl Visibility {
     }
 }
 
-/// Adaptive Transparency, two passes: build the visibility function with `n` nodes in
-/// submission order, then `C = sum(c * vis(z))` in half, plus `bg * vis(inf)`.
+/// Adaptive Transparency, two passes, as the published resolve (GameTechDev/AOIT-Update,
+/// `OIT_DX11/AOIT Technique/DX_Resolve.hlsl`, commit 7a637f28, lines 25-71): build the
+/// visibility function with `n` nodes over the pixel's fragments in submission order, then
+/// `C = sum(c * vis(z))` in f32 registers, written once to an RGBA16F target, plus
+/// `bg * vis(inf)`. The departures from the sample: fragments keep their f32 color and alpha
+/// (the sample reads them back from RGBA8 fragment lists), and `n` may be 1 or 2.
 fn adaptive(frame: &Frame, n: usize) -> Image {
     let (frags, bg) = (&frame.stream.frags, frame.bg());
     per_pixel(frame, |p| {
@@ -848,10 +887,10 @@ fn adaptive(frame: &Frame, n: usize) -> Image {
             let f = &frags[i as usize];
             let vis = v.at(f.depth);
             for k in 0..3 {
-                c[k] = f16r(c[k] + f.color[k] * vis);
+                c[k] += f.color[k] * vis;
             }
         }
         let t = v.total();
-        (over_bg(c, t, bg), t)
+        (over_bg(c.map(f16r), t, bg), t)
     })
 }

@@ -154,15 +154,36 @@ fn bavoil_myers_two_fragments() {
 
 #[test]
 fn meshkin_two_fragments() {
-    // sum(C) + bg * (1 - sum(a)): (0.5, 0, 0.25) + 0.25.
+    // Seed 003, "Simpler is better": D0 + sum(A C) - D0 sum(A), A C premultiplied.
+    // sum(A C) = (0.5, 0, 0.25), sum(A) = 0.75: (0.5, 0, 0.25) + 1 - 0.75 = (0.75, 0.25, 0.5).
     let img = render(
         Method::Meshkin,
         &pixel(&[(1.0, RED, 0.5), (2.0, [0.0, 0.0, 0.25], 0.25)], WHITE),
     );
     close(img.rgb[0], [0.75, 0.25, 0.5], 0.0);
-    // More than full opacity: the background term stops at 0, colors add.
+    assert_eq!(img.vis[0], 0.25);
+    // More than full opacity: sum(A) = 1.5, nothing clamps: (0.5, 0.5, 0) + 1 - 1.5
+    // = (0, 0, -0.5), and the background's weight is -0.5.
     let img = render(Method::Meshkin, &pixel(&[(1.0, RED, 0.75), (2.0, GREEN, 0.75)], WHITE));
-    close(img.rgb[0], [0.5, 0.5, 0.0], 0.0);
+    close(img.rgb[0], [0.0, 0.0, -0.5], 0.0);
+    assert_eq!(img.vis[0], -0.5);
+}
+
+#[test]
+fn meshkin_three_fragments_in_any_order() {
+    // Background D0 = (0.25, 0.5, 1); A = 0.5, 0.25, 0.125 with premultiplied colors
+    // (0.5, 0, 0), (0, 0.25, 0), (0, 0, 0.125): sum(A C) = (0.5, 0.25, 0.125), sum(A) = 0.875,
+    // D0 (1 - 0.875) = (0.03125, 0.0625, 0.125): (0.53125, 0.3125, 0.25). Every order gives it.
+    let f = [
+        (3.0, [0.5, 0.0, 0.0], 0.5),
+        (1.0, [0.0, 0.25, 0.0], 0.25),
+        (2.0, [0.0, 0.0, 0.125], 0.125),
+    ];
+    for order in [[0, 1, 2], [2, 1, 0], [1, 0, 2]] {
+        let img = render(Method::Meshkin, &pixel(&order.map(|i| f[i]), [0.25, 0.5, 1.0]));
+        close(img.rgb[0], [0.53125, 0.3125, 0.25], 0.0);
+        assert_eq!(img.vis[0], 0.125);
+    }
 }
 
 #[test]
@@ -181,13 +202,86 @@ fn adaptive_exact_with_enough_nodes_and_darkens_when_compressed() {
 #[test]
 fn adaptive_removes_the_smallest_area_variation() {
     let mut v = Visibility::default();
-    v.insert(1.0, 0.5, 2); // (1, .5)
-    v.insert(2.0, 0.5, 2); // (1, .5) (2, .25)
-    v.insert(10.0, 0.5, 2); // areas: node 1: 1 * .25, node 2: 8 * .125 -> remove node 1
-    assert_eq!(v.nodes, vec![(1.0, 0.25), (10.0, 0.125)]);
+    v.insert(1.0, 0.5, 3); // (1, .5)
+    v.insert(2.0, 0.5, 3); // (1, .5) (2, .25)
+    v.insert(10.0, 0.5, 3); // (1, .5) (2, .25) (10, .125)
+    // A fourth node between 2 and 10: (1, .5) (2, .25) (9, .125) (10, .0625). Candidates are
+    // nodes 1 and 2 (the last is never removed): areas 1 * .25 and 7 * .125 = .875, so node 1
+    // goes and node 0 takes its T.
+    v.insert(9.0, 0.5, 3);
+    assert_eq!(v.nodes, vec![(1.0, 0.25), (9.0, 0.125), (10.0, 0.0625)]);
     assert_eq!(v.at(1.0), 1.0);
     assert_eq!(v.at(5.0), 0.25);
-    assert_eq!(v.total(), 0.125);
+    assert_eq!(v.total(), 0.0625);
+}
+
+#[test]
+fn adaptive_never_removes_the_last_node() {
+    // AOIT-Update DXAOIT.hlsl line 228: candidates are nodes start..N of the N + 1.
+    // Two nodes, three fragments of alpha 0.5 at z 1, 2, 2.5: (1, .5) (2, .25) (2.5, .125).
+    // Areas: node 1 (2 - 1)(.5 - .25) = .25, node 2 (2.5 - 2)(.25 - .125) = .0625: node 2 is
+    // the smallest but the last, so node 1 goes: (1, .25) (2.5, .125).
+    let mut v = Visibility::default();
+    for z in [1.0, 2.0, 2.5] {
+        v.insert(z, 0.5, 2);
+    }
+    assert_eq!(v.nodes, vec![(1.0, 0.25), (2.5, 0.125)]);
+    // The image: red at z 1 sees 1, green at 2 and blue at 2.5 see node 0's .25, the
+    // background .125: (0.5, 0.125, 0.125) + 0.125 = (0.625, 0.25, 0.25).
+    let s = pixel(&[(1.0, RED, 0.5), (2.0, GREEN, 0.5), (2.5, BLUE, 0.5)], WHITE);
+    let img = render(Method::Adaptive(2), &s);
+    close(img.rgb[0], [0.625, 0.25, 0.25], 0.0);
+    assert_eq!(img.vis[0], 0.125);
+}
+
+#[test]
+fn adaptive_protects_the_front_half_from_eight_nodes() {
+    // Nine fragments of alpha 0.5, front to back, at z 1, 1 + 1/1024, 2, 3, ..., 8: T_i =
+    // 2^-(i+1). Node 1 has by far the smallest area variation, (1/1024) * 2^-2 = 2^-12, but
+    // with 8 nodes the published code only considers nodes 4..7 (DXAOIT.hlsl lines 24-27,
+    // 219-225): areas 1 * (2^-(i) - 2^-(i+1)) = 2^-(i+1), i.e. 2^-5, 2^-6, 2^-7, 2^-8, so
+    // node 7 goes and node 6 takes T_7 = 2^-8.
+    let z = [1.0, 1.0 + 1.0 / 1024.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0];
+    let mut v = Visibility::default();
+    for &zi in &z {
+        v.insert(zi, 0.5, 8);
+    }
+    let p = |e: i32| 2f32.powi(-e);
+    assert_eq!(
+        v.nodes,
+        vec![
+            (1.0, p(1)),
+            (1.0 + 1.0 / 1024.0, p(2)),
+            (2.0, p(3)),
+            (3.0, p(4)),
+            (4.0, p(5)),
+            (5.0, p(6)),
+            (6.0, p(8)),
+            (8.0, p(9)),
+        ]
+    );
+    // With 4 nodes every node but the first and the last is a candidate: after the 5th
+    // fragment (z 4), nodes (1, 2^-1) (1 + 1/1024, 2^-2) (2, 2^-3) (3, 2^-4) (4, 2^-5) have
+    // areas 2^-12, (1 - 1/1024) 2^-3, 2^-4 at nodes 1-3: node 1 goes, node 0 takes 2^-2.
+    let mut v = Visibility::default();
+    for &zi in &z[..5] {
+        v.insert(zi, 0.5, 4);
+    }
+    assert_eq!(v.nodes, vec![(1.0, p(2)), (2.0, p(3)), (3.0, p(4)), (4.0, p(5))]);
+}
+
+#[test]
+fn adaptive_inserts_fragments_of_alpha_zero() {
+    // The published code inserts every fragment (trans 1 - 0 = 1): a purely additive one at
+    // z 1 makes node (1, 1). Two nodes, then (2, .5) and (3, .25): candidate node 1 (area
+    // (2 - 1)(1 - .5) = .5) goes, node 0 takes .5: (1, .5) (3, .25). A fragment at z 1.5 now
+    // sees .5 (it would see 1 had the additive fragment been skipped).
+    let mut v = Visibility::default();
+    v.insert(1.0, 0.0, 2);
+    v.insert(2.0, 0.5, 2);
+    v.insert(3.0, 0.5, 2);
+    assert_eq!(v.nodes, vec![(1.0, 0.5), (3.0, 0.25)]);
+    assert_eq!(v.at(1.5), 0.5);
 }
 
 /// A byte in unorm: `round(x * 255)`.
@@ -266,7 +360,9 @@ fn every_standard_method_renders_a_small_scene() {
     for m in Method::standard_list() {
         let img = m.render(&f).unwrap();
         assert_eq!(img.rgb.len(), 32 * 18, "{}", m.name());
-        assert!(img.vis.iter().all(|v| (0.0..=1.0).contains(v)), "{}", m.name());
+        // Meshkin's background weight is 1 - sum(a), negative past full opacity (seed 003).
+        let lo = if m == Method::Meshkin { f32::NEG_INFINITY } else { 0.0 };
+        assert!(img.vis.iter().all(|v| (lo..=1.0).contains(v)), "{}", m.name());
     }
     assert!(Method::Mlab(9).render(&f).is_err());
     assert!(Method::Adaptive(0).render(&f).is_err());
