@@ -4,7 +4,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use oit_lab::dump;
 use oit_lab::methods::{Frame, HT_SIZES, MLAB_SIZES, Method};
 use oit_lab::metrics::score;
-use oit_lab::picture::{Picture, figure};
+use oit_lab::picture::{Cell, INSET_ZOOM, Picture, Row, counts_picture, densest, labelled_figure};
 use oit_lab::report::{Evaluation, evaluate, full_table, summary_table, vis_bias_where};
 use oit_lab::scenes::Scene;
 use std::path::{Path, PathBuf};
@@ -341,6 +341,77 @@ fn write_pictures(e: &Evaluation, dir: Option<&Path>) -> Result<(Picture, Vec<(P
     Ok((reference, cells))
 }
 
+/// A method's column title in the figure: HT says which HT of the paper it is.
+fn figure_title(m: Method) -> String {
+    match m {
+        Method::Hybrid(k) => format!("HT {k} = paper HT {}", k + 1),
+        _ => m.name(),
+    }
+}
+
+/// The legend lines of the figure.
+fn figure_legend(size: (u32, u32), seed: u64) -> Vec<String> {
+    vec![
+        format!(
+            "oit-lab main job, {}x{}, scene seed {seed}, each scene in its own submission order. Per scene, top: the image; the yellow box is shown zoomed in the inset ({INSET_ZOOM}x full size).",
+            size.0, size.1
+        ),
+        "Under each image: PSNR dB / mean FLIP, both over the covered pixels (at least one fragment).".into(),
+        format!(
+            "Bottom: |method - A-buffer| x{DIFF_GAIN} in LINEAR light (byte = {DIFF_GAIN} x linear difference x 255, no sRGB encoding); under the A-buffer: fragments per pixel (magma)."
+        ),
+        "HT K = K head rows + tail = the paper's HT K+1 (same bytes as MLAB K+1).".into(),
+    ]
+}
+
+/// One scene of the labelled figure: the reference with its fragment counts, then each
+/// method with its difference image.
+fn figure_row(
+    e: &Evaluation,
+    reference: Picture,
+    cells: Vec<(Picture, Picture)>,
+    size: (u32, u32),
+    factor: u32,
+) -> Row {
+    let (w, h) = size;
+    let (cw, ch) = (w / factor, h / factor);
+    let region = densest(&e.counts, w, h, cw * 2 / 5 / INSET_ZOOM, ch * 2 / 5 / INSET_ZOOM);
+    let mut out = vec![Cell {
+        title: "A-buffer (exact)".into(),
+        image: reference,
+        caption: "reference".into(),
+        lower: counts_picture(&e.counts, w, h),
+        lower_caption: format!("fragments/px, 0-{}", e.max_depth),
+    }];
+    for (x, (img, diff)) in e.entries.iter().zip(cells) {
+        let q = &x.scores;
+        let psnr = if q.covered.psnr.is_infinite() {
+            "inf".to_string()
+        } else {
+            format!("{:.1}", q.covered.psnr)
+        };
+        out.push(Cell {
+            title: figure_title(x.method),
+            image: img,
+            caption: match q.flip_covered {
+                Some(f) => format!("{psnr} dB / {f:.3}"),
+                None => format!("{psnr} dB"),
+            },
+            lower: diff,
+            lower_caption: String::new(),
+        });
+    }
+    Row {
+        name: e.name.clone(),
+        notes: vec![
+            format!("{:.1} frags/px", e.depth.mean),
+            format!("(covered), max {}", e.max_depth),
+        ],
+        region,
+        cells: out,
+    }
+}
+
 /// Methods shown in the small figure (docs/figure.png).
 const SMALL: [&str; 8] = [
     "OVER unsorted",
@@ -380,6 +451,8 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
     let mut evals = Vec::new();
     let mut rows = Vec::new();
     let mut small_rows = Vec::new();
+    // Cells of the figure: 320 pixels wide at least (640x360 -> 320x180).
+    let factor = (size.0 / 320).max(1);
     for sc in &scenes {
         pb.set_message(format!("{}: generating", sc.name()));
         let stream = sc.generate(size.0, size.1, seed);
@@ -390,23 +463,29 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
         .map_err(runtime)?;
         let dir = out.join(sc.name().to_ascii_lowercase());
         let (reference, cells) = write_pictures(&e, pngs.then_some(dir.as_path()))?;
-        let small: Vec<_> = e
-            .entries
-            .iter()
-            .zip(&cells)
-            .filter(|(x, _)| SMALL.contains(&x.method.name().as_str()))
-            .map(|(_, c)| c.clone())
-            .collect();
-        small_rows.push((reference.clone(), small));
-        rows.push((reference, cells));
+        if pngs {
+            let row = figure_row(&e, reference, cells, size, factor);
+            let mut small = row.clone();
+            small.cells = row
+                .cells
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i == 0 || SMALL.contains(&e.entries[i - 1].method.name().as_str()))
+                .map(|(_, c)| c.clone())
+                .collect();
+            small_rows.push(small);
+            rows.push(row);
+        }
         evals.push(e);
     }
     pb.finish_and_clear();
     if pngs {
         mkdir(&out)?;
-        let f = if size.0 >= 1280 { 8 } else { 4 };
-        figure(&rows, f).write_png(&out.join("figure.png")).map_err(runtime)?;
-        figure(&small_rows, f * 3 / 2)
+        let legend = figure_legend(size, seed);
+        labelled_figure(&rows, factor, &legend)
+            .write_png(&out.join("figure.png"))
+            .map_err(runtime)?;
+        labelled_figure(&small_rows, factor, &legend)
             .write_png_with(&out.join("figure-small.png"), png::Compression::High)
             .map_err(runtime)?;
     }

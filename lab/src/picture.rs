@@ -170,26 +170,166 @@ impl Picture {
     }
 }
 
-/// The Figure 3 grid: for each scene two rows, the images (reference first, then each
-/// method) and under each method its difference image; each cell downscaled by `factor`,
-/// with a 2-pixel gap.
-pub fn figure(rows: &[(Picture, Vec<(Picture, Picture)>)], factor: u32) -> Picture {
-    let gap = 2;
-    let Some((r0, _)) = rows.first() else {
-        return Picture::filled(1, 1, [0; 3]);
+/// One cell of the labelled figure: a method's image and, under it, its difference image
+/// (or, for the reference, its fragment counts), each with a caption.
+#[derive(Clone, Debug)]
+pub struct Cell {
+    /// Column title (the method's name).
+    pub title: String,
+    /// The image at full size.
+    pub image: Picture,
+    /// Caption under the image (PSNR / FLIP).
+    pub caption: String,
+    /// The lower picture at full size (difference image, or fragment counts).
+    pub lower: Picture,
+    /// Caption under the lower picture (may be empty).
+    pub lower_caption: String,
+}
+
+/// One scene of the labelled figure.
+#[derive(Clone, Debug)]
+pub struct Row {
+    /// Scene name, written on the left.
+    pub name: String,
+    /// Smaller lines under the name.
+    pub notes: Vec<String>,
+    /// The zoomed region, `(x, y, w, h)` in full-size pixels.
+    pub region: (u32, u32, u32, u32),
+    /// The cells, reference first.
+    pub cells: Vec<Cell>,
+}
+
+/// Zoom of the insets relative to the full-size image.
+pub const INSET_ZOOM: u32 = 2;
+
+/// The `(x, y, w, h)` window of `w x h` pixels holding the most fragments (`counts` per
+/// pixel, `width` wide), searched on a grid of 4 pixels: the dense region of the insets.
+pub fn densest(counts: &[u32], width: u32, height: u32, w: u32, h: u32) -> (u32, u32, u32, u32) {
+    let (w, h) = (w.min(width), h.min(height));
+    let (wi, hi) = (width as usize, height as usize);
+    // Summed-area table with a zero first row and column.
+    let mut sat = vec![0u64; (wi + 1) * (hi + 1)];
+    for y in 0..hi {
+        for x in 0..wi {
+            sat[(y + 1) * (wi + 1) + x + 1] =
+                counts[y * wi + x] as u64 + sat[y * (wi + 1) + x + 1] + sat[(y + 1) * (wi + 1) + x]
+                    - sat[y * (wi + 1) + x];
+        }
+    }
+    let sum = |x: usize, y: usize| {
+        let (x1, y1) = (x + w as usize, y + h as usize);
+        sat[y1 * (wi + 1) + x1] + sat[y * (wi + 1) + x] - sat[y * (wi + 1) + x1] - sat[y1 * (wi + 1) + x]
     };
-    let (cw, ch) = (r0.width / factor.max(1), r0.height / factor.max(1));
-    let cols = rows.iter().map(|(_, m)| m.len() + 1).max().unwrap_or(1) as u32;
-    let w = cols * (cw + gap) + gap;
-    let h = rows.len() as u32 * 2 * (ch + gap) + gap;
-    let mut out = Picture::filled(w, h, [255, 255, 255]);
-    for (ri, (reference, methods)) in rows.iter().enumerate() {
-        let y = gap + ri as u32 * 2 * (ch + gap);
-        out.blit(&reference.downscale(factor), gap, y);
-        for (mi, (img, diff)) in methods.iter().enumerate() {
-            let x = gap + (mi as u32 + 1) * (cw + gap);
-            out.blit(&img.downscale(factor), x, y);
-            out.blit(&diff.downscale(factor), x, y + ch + gap);
+    let mut best = (0u64, 0u32, 0u32);
+    for y in (0..=(height - h)).step_by(4) {
+        for x in (0..=(width - w)).step_by(4) {
+            let s = sum(x as usize, y as usize);
+            if s > best.0 {
+                best = (s, x, y);
+            }
+        }
+    }
+    (best.1, best.2, w, h)
+}
+
+/// Fragment counts per pixel as a picture: `count / max` through nv-flip's magma.
+pub fn counts_picture(counts: &[u32], width: u32, height: u32) -> Picture {
+    let max = counts.iter().copied().max().unwrap_or(0).max(1) as f32;
+    let v: Vec<f32> = counts.iter().map(|&c| c as f32 / max).collect();
+    Picture::magma(width, height, &v)
+}
+
+/// The cell `pic` downscaled by `factor`, with the region outlined and its zoom
+/// ([`INSET_ZOOM`] times the full size) in the corner of the cell farthest from it.
+fn with_inset(pic: &Picture, factor: u32, region: (u32, u32, u32, u32)) -> Picture {
+    let yellow = [255, 220, 0];
+    let mut cell = pic.downscale(factor);
+    let (rx, ry, rw, rh) = region;
+    let inset = pic.crop(rx, ry, rw, rh).upscale(INSET_ZOOM);
+    let (cx, cy) = ((rx + rw / 2) / factor, (ry + rh / 2) / factor);
+    let ix = if cx < cell.width / 2 {
+        cell.width.saturating_sub(inset.width)
+    } else {
+        0
+    };
+    let iy = if cy < cell.height / 2 {
+        cell.height.saturating_sub(inset.height)
+    } else {
+        0
+    };
+    cell.outline(
+        rx / factor,
+        ry / factor,
+        (rw / factor).max(2),
+        (rh / factor).max(2),
+        yellow,
+    );
+    cell.blit(&inset, ix, iy);
+    cell.outline(
+        ix,
+        iy,
+        inset.width.min(cell.width),
+        inset.height.min(cell.height),
+        yellow,
+    );
+    cell
+}
+
+/// The labelled figure: legend lines at the top, method names over the columns, per scene
+/// (name on the left) a row of images each with a zoomed inset of the scene's dense region and
+/// a caption under it, then a row of lower pictures (difference images) with their captions.
+/// Cells are the full-size pictures downscaled by `factor`.
+pub fn labelled_figure(rows: &[Row], factor: u32, legend: &[String]) -> Picture {
+    use crate::font::{LINE, draw_text, text_width};
+    let Some(first) = rows.first().and_then(|r| r.cells.first()) else {
+        return Picture::filled(1, 1, [255; 3]);
+    };
+    let factor = factor.max(1);
+    let (cw, ch) = (first.image.width / factor, first.image.height / factor);
+    let (gap, scale) = (4u32, 2u32);
+    let line = LINE * scale;
+    let left = rows
+        .iter()
+        .map(|r| text_width(&r.name, scale))
+        .chain(rows.iter().flat_map(|r| r.notes.iter().map(|n| text_width(n, 1))))
+        .max()
+        .unwrap_or(0)
+        + 2 * gap;
+    let cols = rows.iter().map(|r| r.cells.len()).max().unwrap_or(1) as u32;
+    let width =
+        (left + cols * (cw + gap) + gap).max(legend.iter().map(|l| text_width(l, scale) + 2 * gap).max().unwrap_or(0));
+    let header = gap + legend.len() as u32 * line + gap + line + gap;
+    let block = ch + gap + line + ch + gap + line + 2 * gap;
+    let height = header + rows.len() as u32 * block;
+    let mut out = Picture::filled(width, height, [255; 3]);
+    let black = [0; 3];
+    for (i, l) in legend.iter().enumerate() {
+        draw_text(&mut out, gap, gap + i as u32 * line, l, scale, black);
+    }
+    let title_y = gap + legend.len() as u32 * line + gap;
+    for (ci, cell) in rows[0].cells.iter().enumerate() {
+        draw_text(
+            &mut out,
+            left + ci as u32 * (cw + gap),
+            title_y,
+            &cell.title,
+            scale,
+            black,
+        );
+    }
+    for (ri, row) in rows.iter().enumerate() {
+        let y0 = header + ri as u32 * block;
+        draw_text(&mut out, gap, y0 + ch / 2 - line, &row.name, scale, black);
+        for (ni, n) in row.notes.iter().enumerate() {
+            draw_text(&mut out, gap, y0 + ch / 2 + ni as u32 * LINE + 4, n, 1, black);
+        }
+        for (ci, cell) in row.cells.iter().enumerate() {
+            let x = left + ci as u32 * (cw + gap);
+            out.blit(&with_inset(&cell.image, factor, row.region), x, y0);
+            draw_text(&mut out, x, y0 + ch + gap, &cell.caption, scale, black);
+            let y1 = y0 + ch + gap + line;
+            out.blit(&with_inset(&cell.lower, factor, row.region), x, y1);
+            draw_text(&mut out, x, y1 + ch + gap, &cell.lower_caption, scale, black);
         }
     }
     out

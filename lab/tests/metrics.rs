@@ -138,3 +138,43 @@ fn difference_is_gained_in_linear_light_by_hand() {
     let d = Picture::difference(&reference, &test, 8.0);
     assert_eq!(d.data, vec![8, 0, 0, 204, 0, 0, 255, 0, 0, 0, 0, 0]);
 }
+
+#[test]
+fn font_draws_the_glyph_bits() {
+    use oit_lab::font::{draw_text, glyph, text_width};
+    use oit_lab::picture::Picture;
+    // 'I' is .###. / ..#.. x5 / .###.; at scale 1 its top row inks columns 1-3, row 1 column 2.
+    let mut p = Picture::filled(6, 7, [255; 3]);
+    draw_text(&mut p, 0, 0, "I", 1, [0; 3]);
+    let ink = |x: u32, y: u32| p.data[((y * 6 + x) * 3) as usize] == 0;
+    assert_eq!(
+        (0..5).map(|x| ink(x, 0)).collect::<Vec<_>>(),
+        [false, true, true, true, false]
+    );
+    assert_eq!(
+        (0..5).map(|x| ink(x, 1)).collect::<Vec<_>>(),
+        [false, false, true, false, false]
+    );
+    // Two characters: 5 + 1 gap + 5 = 11 columns, doubled at scale 2; a space has no ink.
+    assert_eq!(text_width("ab", 1), 11);
+    assert_eq!(text_width("ab", 2), 22);
+    assert_eq!(glyph(' '), [0; 7]);
+    // Every character of the figure's labels has its own glyph (not the '?' fallback).
+    for c in "|=+-/()[]%:.,'x0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz".chars() {
+        assert!(c == '?' || glyph(c) != glyph('?'), "{c}");
+    }
+}
+
+#[test]
+fn densest_window_by_hand() {
+    use oit_lab::picture::densest;
+    // 16x8 counts, all 1 except a 4x4 block of 9 at (8, 4): the 4x4 window on the 4-pixel
+    // grid with the most fragments is that block (144 against at most 16 elsewhere).
+    let mut counts = vec![1u32; 16 * 8];
+    for y in 4..8 {
+        for x in 8..12 {
+            counts[y * 16 + x] = 9;
+        }
+    }
+    assert_eq!(densest(&counts, 16, 8, 4, 4), (8, 4, 4, 4));
+}
