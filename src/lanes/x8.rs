@@ -707,7 +707,7 @@ mod tests {
                 assert_eq!(g, scalar(*x), "x = {x:e} ({:#x})", x.to_bits());
             }
         };
-        let mut batch = |bits: &mut dyn Iterator<Item = u32>| {
+        let batch = |bits: &mut dyn Iterator<Item = u32>| {
             let mut xs = [0.0f32; 8];
             let mut n = 0;
             for b in bits {
