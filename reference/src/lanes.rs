@@ -1,0 +1,242 @@
+//! Lanes against the scalar kernel: the checks shared by `tests/lanes.rs` and the fuzz
+//! targets. Unlike the rest of this crate these call the kernel on both sides (the 8-wide
+//! `mlab::lanes` entry points and the scalar ones, pixel by pixel), and require byte-for-byte
+//! (rows, tails) and bit-for-bit (resolved f32, pixels) equality; the quantized rows are
+//! also compared with the reference model ([`Model::ref_quantize`]). Each check returns
+//! `Err` with a message naming the broken property (tests turn it into a proptest failure,
+//! the fuzz targets into a panic).
+
+use mlab::glam::Vec3;
+use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan, ResolvedLanes};
+use mlab::{Arithmetic, Background, Fragment, Hybrid, Resolved, Row, TailFormat, Unbiased, mlab as listing1, to_rgba8};
+
+use crate::model::Model;
+
+/// The backgrounds every resolve check uses: none, an opaque color, and one that is not a
+/// valid color (NaN, infinity, negative: backgrounds are not validated, and the lanes must
+/// do with them what the scalar code does).
+pub const BACKGROUNDS: [Background; 3] = [
+    Background::Transparent,
+    Background::Opaque(Vec3::new(0.2, 0.5, 1.0)),
+    Background::Opaque(Vec3::new(f32::NAN, f32::INFINITY, -1.0)),
+];
+
+/// The bits of a resolved pixel: color channels, then transmittance.
+pub fn resolved_bits(r: Resolved) -> [u32; 4] {
+    let c = r.color.to_array().map(f32::to_bits);
+    [c[0], c[1], c[2], r.transmittance.to_bits()]
+}
+
+macro_rules! ensure {
+    ($cond:expr, $($msg:tt)*) => {
+        if !$cond {
+            return Err(format!($($msg)*));
+        }
+    };
+}
+
+/// Resolved lanes against the scalar resolve of each pixel, bit for bit (`get` of each
+/// lane, `None` past the last), and [`ResolvedLanes::rgba8`] and [`ResolvedLanes::pixels`]
+/// against the scalar pixel writers for every background of [`BACKGROUNDS`].
+pub fn check_resolved_lanes(got: &ResolvedLanes, want: &[Resolved; LANES]) -> Result<(), String> {
+    for (lane, w) in want.iter().enumerate() {
+        let g = got.get(lane).map(resolved_bits);
+        ensure!(
+            g == Some(resolved_bits(*w)),
+            "lane {lane} resolve: {g:x?} vs scalar {w:?}"
+        );
+    }
+    ensure!(got.get(LANES).is_none(), "a lane past the last: {:?}", got.get(LANES));
+    for bg in BACKGROUNDS {
+        let rgba = got.rgba8(bg);
+        let pixels = got.pixels(bg);
+        for (lane, w) in want.iter().enumerate() {
+            let p = w.pixel(bg);
+            ensure!(
+                rgba[lane] == to_rgba8(p),
+                "lane {lane} rgba8 {bg:?}: {:?} vs {:?}",
+                rgba[lane],
+                to_rgba8(p)
+            );
+            ensure!(
+                pixels[lane].to_array().map(f32::to_bits) == p.to_array().map(f32::to_bits),
+                "lane {lane} pixel {bg:?}: {:?} vs {p:?}",
+                pixels[lane]
+            );
+        }
+    }
+    Ok(())
+}
+
+/// An MLAB span against 8 scalar arrays, byte for byte.
+pub fn check_mlab_rows<const M: usize>(span: &MlabSpan<M>, pixels: &[[Row; M]; LANES]) -> Result<(), String> {
+    let got = lanes::to_pixel_major(span);
+    for (lane, (g, p)) in got.iter().zip(pixels).enumerate() {
+        ensure!(g == p, "M = {M} lane {lane}: lanes {g:?}, scalar {p:?}");
+    }
+    Ok(())
+}
+
+/// An MLAB span against 8 scalar arrays: rows byte for byte ([`check_mlab_rows`]);
+/// `lanes::mlab_resolve` bit for bit against `resolve_rows` of each pixel
+/// ([`check_resolved_lanes`]); `lanes::mlab_resolve_rgba8` against `to_rgba8` for every
+/// background.
+pub fn check_mlab_span<const M: usize>(span: &MlabSpan<M>, pixels: &[[Row; M]; LANES]) -> Result<(), String> {
+    check_mlab_rows(span, pixels)?;
+    let want = pixels.map(|p| mlab::resolve_rows(&p));
+    for bg in BACKGROUNDS {
+        let got = lanes::mlab_resolve_rgba8(span, bg);
+        let w = want.map(|r| to_rgba8(r.pixel(bg)));
+        ensure!(got == w, "M = {M} mlab_resolve_rgba8 {bg:?}: {got:?} vs {w:?}");
+    }
+    check_resolved_lanes(&lanes::mlab_resolve(span), &want)
+}
+
+/// An HT span against 8 scalar pixels: head rows and tail bytes equal.
+pub fn check_hybrid_rows<const K: usize, A: Arithmetic>(
+    span: &HybridSpan<K, A>,
+    pixels: &[Hybrid<K, A>; LANES],
+) -> Result<(), String> {
+    for (lane, p) in pixels.iter().enumerate() {
+        for j in 0..K {
+            ensure!(
+                span.head[j][lane] == p.head()[j],
+                "{} K = {K} lane {lane} head row {j}: lanes {:?}, scalar {:?}",
+                A::NAME,
+                span.head[j][lane],
+                p.head()[j]
+            );
+        }
+        ensure!(
+            span.tails[lane].to_bytes() == p.tail().to_bytes(),
+            "{} K = {K} lane {lane} tail: lanes {:?}, scalar {:?}",
+            A::NAME,
+            span.tails[lane],
+            p.tail()
+        );
+    }
+    Ok(())
+}
+
+/// An HT span against 8 scalar pixels: bytes ([`check_hybrid_rows`]); `lanes::hybrid_resolve`
+/// bit for bit against `Hybrid::resolve` ([`check_resolved_lanes`]);
+/// `lanes::hybrid_resolve_rgba8` against `to_rgba8` for every background.
+pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
+    span: &HybridSpan<K, A>,
+    pixels: &[Hybrid<K, A>; LANES],
+) -> Result<(), String> {
+    check_hybrid_rows(span, pixels)?;
+    let want = pixels.map(|p| p.resolve());
+    for bg in BACKGROUNDS {
+        let got = lanes::hybrid_resolve_rgba8(span, bg);
+        let w = want.map(|r| to_rgba8(r.pixel(bg)));
+        ensure!(got == w, "K = {K} hybrid_resolve_rgba8 {bg:?}: {got:?} vs {w:?}");
+    }
+    check_resolved_lanes(&lanes::hybrid_resolve(span), &want)
+}
+
+/// True for the default arithmetic, whose entry points without a type parameter
+/// (`FragmentLanes::quantize`, `lanes::mlab_insert_fragments`, ...) are checked too.
+fn is_default<A: Arithmetic>() -> bool {
+    A::NAME == Unbiased::NAME
+}
+
+/// Validation and quantization in lanes on 8 raw fragments `(color, alpha, depth)`, given
+/// as premultiplied and as straight color: `FragmentLanes::quantize_with::<A>` and
+/// `quantize_straight_with::<A>` report exactly the lanes of `mask` as valid or invalid,
+/// valid exactly where the scalar constructor accepts, with the scalar row (`A::quantize`)
+/// and the reference row ([`Model::ref_quantize`]); every other lane holds `Row::EMPTY`.
+/// Then `mlab_insert_fragments_with::<A>` (M = 2) and `hybrid_insert_fragments` (K = 1)
+/// report the invalid lanes and equal the scalar inserts of the valid rows. For the
+/// default arithmetic, `quantize`, `quantize_straight` and `mlab_insert_fragments` give
+/// the same.
+pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask: u8) -> Result<(), String> {
+    let name = A::NAME;
+    let fl = FragmentLanes {
+        color: core::array::from_fn(|c| core::array::from_fn(|l| raws[l].0[c])),
+        alpha: raws.map(|r| r.1),
+        depth: raws.map(|r| r.2),
+    };
+    for straight in [false, true] {
+        let q = if straight {
+            fl.quantize_straight_with::<A>(mask)
+        } else {
+            fl.quantize_with::<A>(mask)
+        };
+        if is_default::<A>() {
+            let d = if straight {
+                fl.quantize_straight(mask)
+            } else {
+                fl.quantize(mask)
+            };
+            ensure!(d == q, "the default quantization is not {name}'s: {d:?} vs {q:?}");
+        }
+        ensure!(q.valid & q.invalid == 0, "lanes both valid and invalid: {q:?}");
+        ensure!(q.valid | q.invalid == mask, "not exactly the lanes of {mask:#010b}: {q:?}");
+        for (lane, &(c, a, z)) in raws.iter().enumerate() {
+            let on = mask >> lane & 1 == 1;
+            let scalar = if straight {
+                Fragment::straight(Vec3::from_array(c), a, z)
+            } else {
+                Fragment::premultiplied(Vec3::from_array(c), a, z)
+            };
+            match (on, scalar) {
+                (true, Ok(f)) => {
+                    ensure!(
+                        q.valid >> lane & 1 == 1,
+                        "lane {lane}: scalar accepts {:?}, lanes refuse (straight {straight})",
+                        raws[lane]
+                    );
+                    let (row, scalar_row, reference) = (q.rows[lane], A::quantize(&f), A::ref_row(&f));
+                    ensure!(
+                        row == scalar_row && row == reference,
+                        "lane {lane} {name} straight {straight}: lanes {row:?}, scalar {scalar_row:?}, reference {reference:?}"
+                    );
+                }
+                (true, Err(e)) => ensure!(
+                    q.invalid >> lane & 1 == 1 && q.rows[lane] == Row::EMPTY,
+                    "lane {lane}: scalar refuses {:?} ({e:?}), lanes give {q:?} (straight {straight})",
+                    raws[lane]
+                ),
+                (false, _) => ensure!(q.rows[lane] == Row::EMPTY, "off lane {lane}: {:?}", q.rows[lane]),
+            }
+        }
+    }
+    // The insert_fragments entry points: invalid lanes reported and left untouched.
+    let q = fl.quantize_with::<A>(mask);
+    let mut span = [[Row::EMPTY; LANES]; 2];
+    let invalid = lanes::mlab_insert_fragments_with::<A, 2>(&mut span, &fl, mask);
+    ensure!(invalid.0 == q.invalid, "mlab_insert_fragments_with: {invalid:?} vs {q:?}");
+    if is_default::<A>() {
+        let mut d = [[Row::EMPTY; LANES]; 2];
+        let invalid = lanes::mlab_insert_fragments(&mut d, &fl, mask);
+        ensure!(
+            invalid.0 == q.invalid && d == span,
+            "mlab_insert_fragments is not {name}'s"
+        );
+    }
+    let mut expected = [[Row::EMPTY; 2]; LANES];
+    for (lane, p) in expected.iter_mut().enumerate() {
+        if q.valid >> lane & 1 == 1 {
+            listing1::insert_with::<A, 2>(p, q.rows[lane]);
+        }
+    }
+    check_mlab_rows(&span, &expected)?;
+    let mut hspan = HybridSpan::<1, A>::new();
+    let invalid = lanes::hybrid_insert_fragments(&mut hspan, &fl, mask);
+    ensure!(invalid.0 == q.invalid, "hybrid_insert_fragments: {invalid:?} vs {q:?}");
+    let mut hexpected = [Hybrid::<1, A>::new(); LANES];
+    for (lane, p) in hexpected.iter_mut().enumerate() {
+        if q.valid >> lane & 1 == 1 {
+            p.insert_row(q.rows[lane]);
+        }
+    }
+    // Untouched invalid lanes: their tails are still empty.
+    for lane in (0..LANES).filter(|&l| q.valid >> l & 1 == 0) {
+        ensure!(
+            hspan.tails[lane] == <A::Tail as TailFormat>::EMPTY && hspan.head[0][lane] == Row::EMPTY,
+            "hybrid_insert_fragments wrote lane {lane}, which is not valid"
+        );
+    }
+    check_hybrid_span(&hspan, &hexpected)
+}

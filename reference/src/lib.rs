@@ -1,0 +1,26 @@
+//! `mlab-reference`: the one reference that the kernel's tests, the fuzz targets and the
+//! evaluation tool (oit-lab) check the kernel against, kept apart from the kernel the way
+//! BLAKE3 keeps its `reference_impl`: small, plain, written from the documentation.
+//!
+//! - [`oracle`]: the exact per-pixel composite (every fragment, sorted front to back, later
+//!   submission in front on equal depth, f64), and the bounds that relate it to the
+//!   kernel's quantized result ([`oracle::oracle_with_bound`], [`oracle::multilinear_bound`],
+//!   [`oracle::visibility_bound`]).
+//! - [`model`]: reference models of the kernel's two arithmetics ([`Model`], implemented for
+//!   [`mlab::Paper`] and [`mlab::Unbiased`]): quantization, dithers, merge products, a
+//!   `Vec`-based Listing 1, the HT tail layouts and a sort-and-sum Hybrid Transparency.
+//! - [`lanes`]: the lanes-vs-scalar checks (the only part that calls the kernel's code, on
+//!   both sides of each comparison).
+//!
+//! The oracle and the models use the kernel's types (`Row`, `Fragment`) for input and
+//! output only, and never call its arithmetic: every formula is re-derived from
+//! `src/arith.rs`, `src/unorm.rs`, the tail tables of `src/tail.rs`, `docs/algorithm.md` and
+//! `docs/layout.md`, and the models are checked against the literal examples of those docs
+//! (`cargo test -p mlab-reference`), so that a reference cannot drift along with the kernel.
+
+pub mod lanes;
+pub mod model;
+pub mod oracle;
+
+pub use model::Model;
+pub use oracle::{DELTA, DELTA_UNBIASED, Layer, oracle, oracle_with_bound};
