@@ -28,8 +28,11 @@ fn main() -> Result<(), FragmentError> {
         fragments.push(f);
     }
 
-    // Exact: sort front to back and composite.
-    fragments.sort_by(|a, b| a.depth().total_cmp(&b.depth()));
+    // Exact: sort front to back (on equal depth the later submission in front, as Listing 1
+    // puts it: reversed, then a stable sort) and composite. These few lines keep the example
+    // self-contained; the tests, fuzz targets and lab share the f64 oracle of `mlab-reference`.
+    fragments.reverse();
+    fragments.sort_by(|a, b| a.depth().partial_cmp(&b.depth()).expect("finite depths"));
     let (mut color, mut visibility) = (Vec3::ZERO, 1.0);
     for f in &fragments {
         color += f.color() * visibility;

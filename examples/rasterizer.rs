@@ -13,6 +13,7 @@
 //! Colors are linear throughout; the PNG is sRGB-encoded at the end, for display only.
 
 use mlab::{Background, DynFramebuffer, Fragment, Framebuffer, Layers, Row, SpanBatcher};
+use mlab_reference::{Layer, oracle};
 
 #[path = "common/raster.rs"]
 mod raster;
@@ -32,8 +33,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The kernel's framebuffer: storage is ours, the view checks every size.
     let mut storage = vec![Row::EMPTY; layers.rows_needed(W, H)?];
     let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut storage, W, H)?;
-    // The exact answer: every fragment of every pixel, premultiplied color and alpha.
-    let mut abuffer: Vec<Vec<(f32, [f64; 4])>> = vec![Vec::new(); (W * H) as usize];
+    // The exact answer: every fragment of every pixel (premultiplied color, alpha, depth),
+    // composited by the f64 oracle the tests use (`mlab-reference`).
+    let mut abuffer: Vec<Vec<Layer>> = vec![Vec::new(); (W * H) as usize];
 
     let mesh = raster::scene(W, H, 96, 48);
     let mut covered = Vec::new();
@@ -46,9 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             // Straight linear color; the kernel premultiplies and quantizes it.
             let f = Fragment::straight_rgb(t.color, t.alpha, z)?;
             batch.insert(x, y, &f)?;
-            let a = t.alpha as f64;
-            let c = t.color.map(|c| c as f64 * a);
-            abuffer[(y * W + x) as usize].push((z, [c[0], c[1], c[2], a]));
+            abuffer[(y * W + x) as usize].push(Layer::from(f));
             fragments += 1;
         }
     }
@@ -56,7 +56,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let mut image = vec![mlab::glam::Vec4::ZERO; (W * H) as usize];
     fb.resolve_into(&mut image, Background::Opaque(BACKGROUND.into()))?;
-    let exact: Vec<[f64; 3]> = abuffer.iter_mut().map(|frags| composite(frags)).collect();
+    let exact: Vec<[f64; 3]> = abuffer
+        .iter()
+        .map(|frags| oracle(frags, BACKGROUND.map(f64::from)).0)
+        .collect();
 
     let mse = image
         .iter()
@@ -92,22 +95,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     writer.finish()?;
     println!("wrote out/rasterizer.png (left: kernel, right: A-buffer)");
     Ok(())
-}
-
-/// The exact composite of one pixel: fragments sorted front to back (stable: on equal depth
-/// the later one in front, as MLAB's `<=` puts it), blended in f64 over the background.
-fn composite(frags: &mut [(f32, [f64; 4])]) -> [f64; 3] {
-    frags.reverse();
-    frags.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut color = [0.0f64; 3];
-    let mut visible = 1.0f64;
-    for (_, [r, g, b, a]) in frags.iter() {
-        for (c, v) in color.iter_mut().zip([r, g, b]) {
-            *c += visible * v;
-        }
-        visible *= 1.0 - a;
-    }
-    [0, 1, 2].map(|c| color[c] + visible * BACKGROUND[c] as f64)
 }
 
 /// Linear `[0, 1]` to an sRGB-encoded byte (display only).

@@ -1,6 +1,7 @@
 //! Lanes against the scalar kernel: byte for byte, for any stream (valid fragments, arbitrary
 //! rows read from bytes, masks), M in {1, 2, 3, 4, 8} and K in {1, 3, 7}, in both
-//! arithmetics (Paper and Unbiased). No tolerances.
+//! arithmetics (Paper and Unbiased). No tolerances. The checks themselves are
+//! `mlab_reference::lanes` (`reference/`), which the fuzz targets run too.
 //!
 //! Set `MLAB_EXPECT_BACKEND` to a `lanes::BACKEND` string (`sse2`, `avx2`, `neon`, ...) to make
 //! `backend_is_the_expected_one` fail when the build did not pick that backend (CI does, for
@@ -11,10 +12,11 @@
 mod common;
 
 use mlab::glam::Vec3;
-use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES};
-use mlab::{
-    Arithmetic, Background, Fragment, Paper, Row, TailFormat, Unbiased, hybrid, mlab as listing1, resolve_rows,
-    to_rgba8,
+use mlab::lanes::{self, HybridSpan, LANES};
+use mlab::{Fragment, Hybrid, Paper, Row, TailFormat, Unbiased, hybrid, mlab as listing1};
+use mlab_reference::Model;
+use mlab_reference::lanes::{
+    check_fragment_lanes, check_hybrid_rows, check_hybrid_span, check_mlab_rows, check_mlab_span,
 };
 use proptest::prelude::*;
 
@@ -28,50 +30,15 @@ fn backend_is_the_expected_one() {
 
 type Step = ([Row; LANES], u8);
 
-const BACKGROUNDS: [Background; 3] = [
-    Background::Transparent,
-    Background::Opaque(Vec3::new(0.2, 0.5, 1.0)),
-    Background::Opaque(Vec3::new(f32::NAN, f32::INFINITY, -1.0)),
-];
-
-fn bits(r: mlab::Resolved) -> [u32; 4] {
-    let c = r.color.to_array().map(f32::to_bits);
-    [c[0], c[1], c[2], r.transmittance.to_bits()]
-}
-
-/// Check resolved lanes against the scalar resolve of each pixel, bit for bit, and the
-/// RGBA8 writers for several backgrounds.
-fn check_resolved(got: &lanes::ResolvedLanes, want: &[mlab::Resolved; LANES]) -> Result<(), TestCaseError> {
-    for lane in 0..LANES {
-        let g = got.get(lane).expect("lane in range");
-        prop_assert_eq!(bits(g), bits(want[lane]), "lane {} resolve", lane);
-    }
-    for bg in BACKGROUNDS {
-        let rgba = got.rgba8(bg);
-        let pixels = got.pixels(bg);
-        for lane in 0..LANES {
-            prop_assert_eq!(
-                rgba[lane],
-                to_rgba8(want[lane].pixel(bg)),
-                "lane {} rgba8 {:?}",
-                lane,
-                bg
-            );
-            prop_assert_eq!(
-                pixels[lane].to_array().map(f32::to_bits),
-                want[lane].pixel(bg).to_array().map(f32::to_bits)
-            );
-        }
-    }
-    Ok(())
+/// A check of `mlab_reference::lanes` as a proptest failure, with what was running.
+fn fail(context: String) -> impl FnOnce(String) -> TestCaseError {
+    move |e| TestCaseError::fail(format!("{context}: {e}"))
 }
 
 /// Run a stream through the MLAB lanes and through the scalar kernel per lane; compare
-/// every byte after every step, then the resolve.
-fn check_mlab<A: Arithmetic, const M: usize>(
-    initial: &[[Row; M]; LANES],
-    stream: &[Step],
-) -> Result<(), TestCaseError> {
+/// every byte after every step, then the resolve (`mlab_reference::lanes::check_mlab_span`:
+/// bit for bit, RGBA8 and pixels on every background).
+fn check_mlab<A: Model, const M: usize>(initial: &[[Row; M]; LANES], stream: &[Step]) -> Result<(), TestCaseError> {
     let mut span = lanes::from_pixel_major(initial);
     prop_assert_eq!(&lanes::to_pixel_major(&span), initial, "lossless conversion");
     let mut pixels = *initial;
@@ -82,34 +49,19 @@ fn check_mlab<A: Arithmetic, const M: usize>(
                 listing1::insert_with::<A, M>(&mut pixels[lane], rows[lane]);
             }
         }
-        prop_assert_eq!(
-            &lanes::to_pixel_major(&span),
-            &pixels,
-            "{} M={} after mask {:08b}",
-            A::NAME,
-            M,
-            mask
-        );
+        check_mlab_rows(&span, &pixels).map_err(fail(format!("{} after mask {mask:08b}", A::NAME)))?;
     }
-    let want = pixels.map(|p| resolve_rows(&p));
-    for bg in BACKGROUNDS {
-        prop_assert_eq!(
-            lanes::mlab_resolve_rgba8(&span, bg),
-            want.map(|r| to_rgba8(r.pixel(bg))),
-            "M={} rgba8",
-            M
-        );
-    }
-    check_resolved(&lanes::mlab_resolve(&span), &want)
+    check_mlab_span(&span, &pixels).map_err(fail(format!("{} M={M} resolve", A::NAME)))
 }
 
-fn check_hybrid<const K: usize, A: Arithmetic>(
-    initial: &HybridSpan<K, A>,
-    stream: &[Step],
-) -> Result<(), TestCaseError> {
+/// The same for HT: the scalar side through `hybrid::insert` on each lane's head and tail.
+fn check_hybrid<const K: usize, A: Model>(initial: &HybridSpan<K, A>, stream: &[Step]) -> Result<(), TestCaseError> {
     let mut span = *initial;
     let mut heads: [[Row; K]; LANES] = core::array::from_fn(|l| core::array::from_fn(|j| initial.head[j][l]));
     let mut tails = initial.tails;
+    let pixels = |heads: &[[Row; K]; LANES], tails: &[A::Tail; LANES]| -> [Hybrid<K, A>; LANES] {
+        core::array::from_fn(|l| Hybrid::from_parts(heads[l], tails[l]))
+    };
     for (rows, mask) in stream {
         lanes::hybrid_insert(&mut span, rows, *mask);
         for lane in 0..LANES {
@@ -117,31 +69,9 @@ fn check_hybrid<const K: usize, A: Arithmetic>(
                 hybrid::insert(&mut heads[lane], &mut tails[lane], rows[lane]);
             }
         }
-        for lane in 0..LANES {
-            for j in 0..K {
-                prop_assert_eq!(
-                    span.head[j][lane],
-                    heads[lane][j],
-                    "{} K={} head {} lane {}",
-                    A::NAME,
-                    K,
-                    j,
-                    lane
-                );
-            }
-        }
-        prop_assert_eq!(span.tails, tails, "{} K={} tails", A::NAME, K);
+        check_hybrid_rows(&span, &pixels(&heads, &tails)).map_err(fail(format!("after mask {mask:08b}")))?;
     }
-    let want: [mlab::Resolved; LANES] = core::array::from_fn(|l| hybrid::resolve(&heads[l], tails[l]));
-    for bg in BACKGROUNDS {
-        prop_assert_eq!(
-            lanes::hybrid_resolve_rgba8(&span, bg),
-            want.map(|r| to_rgba8(r.pixel(bg))),
-            "K={} rgba8",
-            K
-        );
-    }
-    check_resolved(&lanes::hybrid_resolve(&span), &want)
+    check_hybrid_span(&span, &pixels(&heads, &tails)).map_err(fail(format!("{} K={K} resolve", A::NAME)))
 }
 
 fn check_all(stream: &[Step], garbage: &[u64]) -> Result<(), TestCaseError> {
@@ -149,7 +79,7 @@ fn check_all(stream: &[Step], garbage: &[u64]) -> Result<(), TestCaseError> {
     check_arithmetic::<Unbiased>(stream, garbage)
 }
 
-fn check_arithmetic<A: Arithmetic>(stream: &[Step], garbage: &[u64]) -> Result<(), TestCaseError> {
+fn check_arithmetic<A: Model>(stream: &[Step], garbage: &[u64]) -> Result<(), TestCaseError> {
     // From empty arrays.
     check_mlab::<A, 1>(&[[Row::EMPTY; 1]; LANES], stream)?;
     check_mlab::<A, 2>(&[[Row::EMPTY; 2]; LANES], stream)?;
@@ -200,45 +130,17 @@ proptest! {
     }
 
     /// Validation and quantization in lanes agree with the scalar constructors lane by lane,
-    /// for arbitrary f32 bit patterns.
+    /// for arbitrary f32 bit patterns, premultiplied and straight, in both arithmetics; the
+    /// rows equal the reference quantization too; `mlab_insert_fragments(_with)` and
+    /// `hybrid_insert_fragments` insert exactly the valid lanes
+    /// (`mlab_reference::lanes::check_fragment_lanes`).
     #[test]
     fn quantize_lanes_equals_scalar(
         raw in prop::array::uniform8((prop::array::uniform3(edge_f32()), edge_f32(), edge_f32())),
         mask in any::<u8>(),
     ) {
-        let frags = FragmentLanes {
-            color: core::array::from_fn(|c| core::array::from_fn(|l| raw[l].0[c])),
-            alpha: raw.map(|r| r.1),
-            depth: raw.map(|r| r.2),
-        };
-        for (straight, unbiased) in [(false, false), (true, false), (false, true), (true, true)] {
-            let q = match (straight, unbiased) {
-                (false, false) => frags.quantize_with::<Paper>(mask),
-                (true, false) => frags.quantize_straight_with::<Paper>(mask),
-                (false, true) => frags.quantize(mask),
-                (true, true) => frags.quantize_straight(mask),
-            };
-            prop_assert_eq!(q.valid & q.invalid, 0);
-            prop_assert_eq!(q.valid | q.invalid, mask);
-            for lane in 0..LANES {
-                let (c, a, z) = raw[lane];
-                let scalar = if straight {
-                    Fragment::straight(Vec3::from_array(c), a, z)
-                } else {
-                    Fragment::premultiplied(Vec3::from_array(c), a, z)
-                };
-                let on = mask & (1 << lane) != 0;
-                match scalar {
-                    Ok(f) if on => {
-                        prop_assert!(q.valid & (1 << lane) != 0, "lane {} should be valid", lane);
-                        let want = if unbiased { Unbiased::quantize(&f) } else { f.row() };
-                        prop_assert_eq!(q.rows[lane], want);
-                    }
-                    Err(_) if on => prop_assert!(q.invalid & (1 << lane) != 0, "lane {} should be invalid", lane),
-                    _ => prop_assert_eq!(q.rows[lane], Row::EMPTY),
-                }
-            }
-        }
+        check_fragment_lanes::<Paper>(&raw, mask).map_err(fail("paper".into()))?;
+        check_fragment_lanes::<Unbiased>(&raw, mask).map_err(fail("unbiased".into()))?;
     }
 }
 

@@ -78,3 +78,32 @@ fn array_sizes() {
     assert_eq!(core::mem::size_of::<Hybrid<3, Paper>>(), 32);
     assert_eq!(core::mem::size_of::<[Row; 8]>(), 64);
 }
+
+/// `resolve::unorm`, the documented reading of a byte (`b as f32 * INV255`), for every
+/// byte: 0 and 255 exact, strictly increasing, within one f32 ulp of `b / 255`, quantized
+/// back to the same byte (`unorm::quantize`, as a fragment's color is), and what the resolve
+/// of a single row gives for its color and transmittance bytes, bit for bit.
+#[test]
+fn unorm_reads_every_byte_as_the_resolve_does() {
+    use mlab::resolve::{INV255, unorm};
+    assert_eq!(unorm(0), 0.0);
+    assert_eq!(unorm(255), 1.0);
+    for b in 0..=255u8 {
+        let v = unorm(b);
+        assert_eq!(v.to_bits(), (f32::from(b) * INV255).to_bits(), "byte {b}");
+        let exact = f64::from(b) / 255.0;
+        let ulp = f64::from(f32::EPSILON) * exact.max(f64::from(f32::MIN_POSITIVE));
+        assert!((f64::from(v) - exact).abs() <= ulp, "byte {b}: {v} vs {exact}");
+        if b > 0 {
+            assert!(v > unorm(b - 1), "byte {b} not above byte {}", b - 1);
+        }
+        assert_eq!(mlab::unorm::quantize(v), b, "byte {b} does not round-trip");
+        let r = mlab::resolve_rows(&[Row::new([b, 255 - b, b / 2], b, 1.0)]);
+        assert_eq!(
+            r.color.to_array().map(f32::to_bits),
+            [unorm(b), unorm(255 - b), unorm(b / 2)].map(f32::to_bits),
+            "byte {b}: resolve color"
+        );
+        assert_eq!(r.transmittance.to_bits(), unorm(b).to_bits(), "byte {b}: resolve T");
+    }
+}

@@ -1,9 +1,10 @@
 //! Properties that pin the paper's claims (issue: kernel, section 8).
 //!
-//! Every property runs in both arithmetics. Quantization bounds used below (DELTA =
-//! 0.5/255 + 1e-6 for the paper's rounding, 1/255 + 1e-6 for the unbiased one: see
-//! `common::delta`; n fragments, per channel):
-//! - M >= n: `DELTA * sum_j (1 + C_behind_j)` (see `common::oracle_with_bound`), at most
+//! Every property runs in both arithmetics, against the exact oracle of `mlab-reference`.
+//! Quantization bounds used below (DELTA = 0.5/255 + 1e-6 for the paper's rounding,
+//! 1/255 + 1e-6 for the unbiased one: `mlab_reference::Model::DELTA`; n fragments, per
+//! channel):
+//! - M >= n: `DELTA * sum_j (1 + C_behind_j)` (see `mlab_reference::oracle_with_bound`), at most
 //!   `2 n DELTA` for normal fragments over a background in [0, 1].
 //! - M = 1, stream sorted front to back or back to front: `4 n DELTA`. Each step adds at
 //!   most DELTA from each of: color quantization, transmittance quantization, the color
@@ -16,7 +17,8 @@ mod common;
 
 use common::*;
 use mlab::glam::Vec3;
-use mlab::{Arithmetic, BlendingArray, Fragment, Hybrid, Paper, Row, TailFormat, Unbiased, mlab as listing1};
+use mlab::{BlendingArray, Fragment, Hybrid, Paper, Row, TailFormat, Unbiased, mlab as listing1};
+use mlab_reference::{Model, oracle, oracle_with_bound};
 use proptest::prelude::*;
 
 const BG: [f64; 3] = [0.25, 0.5, 1.0];
@@ -25,7 +27,7 @@ fn bg() -> Vec3 {
     Vec3::new(BG[0] as f32, BG[1] as f32, BG[2] as f32)
 }
 
-fn run_mlab<const M: usize, A: Arithmetic>(stream: &[Fragment]) -> BlendingArray<M, A> {
+fn run_mlab<const M: usize, A: Model>(stream: &[Fragment]) -> BlendingArray<M, A> {
     let mut b = BlendingArray::<M, A>::new();
     for f in stream {
         b.insert(f);
@@ -33,7 +35,7 @@ fn run_mlab<const M: usize, A: Arithmetic>(stream: &[Fragment]) -> BlendingArray
     b
 }
 
-fn run_hybrid<const K: usize, A: Arithmetic>(stream: &[Fragment]) -> Hybrid<K, A> {
+fn run_hybrid<const K: usize, A: Model>(stream: &[Fragment]) -> Hybrid<K, A> {
     let mut h = Hybrid::<K, A>::new();
     for f in stream {
         h.insert(f);
@@ -46,10 +48,10 @@ fn pixel(c: Vec3) -> [f64; 3] {
 }
 
 /// Property 1 for one M: streams of at most M fragments match the oracle within the bound.
-fn mlab_fits_matches_oracle<const M: usize, A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+fn mlab_fits_matches_oracle<const M: usize, A: Model>(stream: &[Fragment]) -> Result<(), TestCaseError> {
     prop_assume!(stream.len() <= M);
     let got = pixel(run_mlab::<M, A>(stream).resolve().over(bg()));
-    let (want, _, bound) = oracle_with_bound_delta(stream, BG, delta::<A>());
+    let (want, _, bound) = oracle_with_bound(stream, BG, A::DELTA);
     for ch in 0..3 {
         prop_assert!(
             (got[ch] - want[ch]).abs() <= bound[ch],
@@ -60,28 +62,28 @@ fn mlab_fits_matches_oracle<const M: usize, A: Arithmetic>(stream: &[Fragment]) 
     Ok(())
 }
 
-fn p1<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+fn p1<A: Model>(stream: &[Fragment]) -> Result<(), TestCaseError> {
     mlab_fits_matches_oracle::<1, A>(&stream[..stream.len().min(1)])?;
     mlab_fits_matches_oracle::<2, A>(&stream[..stream.len().min(2)])?;
     mlab_fits_matches_oracle::<4, A>(&stream[..stream.len().min(4)])?;
     mlab_fits_matches_oracle::<8, A>(stream)
 }
 
-fn p1_hybrid<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+fn p1_hybrid<A: Model>(stream: &[Fragment]) -> Result<(), TestCaseError> {
     let h = run_hybrid::<7, A>(stream);
     prop_assert_eq!(h.tail().count(), 0);
     let got = pixel(h.resolve().over(bg()));
-    let (want, _, bound) = oracle_with_bound_delta(stream, BG, delta::<A>());
+    let (want, _, bound) = oracle_with_bound(stream, BG, A::DELTA);
     for ch in 0..3 {
         prop_assert!((got[ch] - want[ch]).abs() <= bound[ch], "{}", A::NAME);
     }
     Ok(())
 }
 
-fn p2<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+fn p2<A: Model>(stream: &[Fragment]) -> Result<(), TestCaseError> {
     let got = pixel(run_mlab::<1, A>(stream).resolve().over(bg()));
     let (want, _) = oracle(stream, BG);
-    let bound = 4.0 * stream.len() as f64 * delta::<A>();
+    let bound = 4.0 * stream.len() as f64 * A::DELTA;
     prop_assert!(
         max_diff(got, want) <= bound,
         "{}: got {:?} want {:?} bound {}",
@@ -93,8 +95,8 @@ fn p2<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-fn p3<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
-    let nearest = A::quantize(&stream[oracle_order(stream)[0]]);
+fn p3<A: Model>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+    let nearest = A::quantize(&stream[mlab_reference::oracle::order(stream)[0]]);
     let want = [nearest.color()[0], nearest.color()[1], nearest.color()[2], 255];
     let px = |r: mlab::Resolved| mlab::to_rgba8(r.over(bg()).extend(1.0));
     prop_assert_eq!(px(run_mlab::<1, A>(stream).resolve()), want);
@@ -111,8 +113,8 @@ fn p3<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
 /// visibility by less than `delta` (up to f32 slack), so two orders differ by at most
 /// `2 n delta`, and each stays within `n delta` of the product of the quantized
 /// transmittances.
-fn p4<A: Arithmetic>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), TestCaseError> {
-    let half = stream.len() as f64 * (delta::<A>() - 1e-6) + 1e-5;
+fn p4<A: Model>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), TestCaseError> {
+    let half = stream.len() as f64 * (A::DELTA - 1e-6) + 1e-5;
     let v = |s: &[Fragment], m: usize| -> f64 {
         (match m {
             1 => visibility_bytes_product(run_mlab::<1, A>(s).rows()),
@@ -131,7 +133,7 @@ fn p4<A: Arithmetic>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), T
     Ok(())
 }
 
-fn p5<A: Arithmetic>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), TestCaseError> {
+fn p5<A: Model>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), TestCaseError> {
     prop_assert_eq!(run_hybrid::<1, A>(stream), run_hybrid::<1, A>(shuffled));
     prop_assert_eq!(run_hybrid::<3, A>(stream), run_hybrid::<3, A>(shuffled));
     prop_assert_eq!(run_hybrid::<7, A>(stream), run_hybrid::<7, A>(shuffled));
@@ -147,7 +149,7 @@ fn p5<A: Arithmetic>(stream: &[Fragment], shuffled: &[Fragment]) -> Result<(), T
     Ok(())
 }
 
-fn p6<A: Arithmetic>(stream: &[Fragment], additive: &[Fragment]) -> Result<(), TestCaseError> {
+fn p6<A: Model>(stream: &[Fragment], additive: &[Fragment]) -> Result<(), TestCaseError> {
     let mut b1 = BlendingArray::<1, A>::new();
     let mut b3 = BlendingArray::<3, A>::new();
     let mut b8 = BlendingArray::<8, A>::new();
@@ -171,9 +173,9 @@ fn p6<A: Arithmetic>(stream: &[Fragment], additive: &[Fragment]) -> Result<(), T
     Ok(())
 }
 
-fn p7<A: Arithmetic>(stream: &[Fragment]) -> Result<(), TestCaseError> {
+fn p7<A: Model>(stream: &[Fragment]) -> Result<(), TestCaseError> {
     let got = pixel(run_mlab::<8, A>(stream).resolve().over(bg()));
-    let (want, _, bound) = oracle_with_bound_delta(stream, BG, delta::<A>());
+    let (want, _, bound) = oracle_with_bound(stream, BG, A::DELTA);
     for ch in 0..3 {
         prop_assert!(
             (got[ch] - want[ch]).abs() <= bound[ch],

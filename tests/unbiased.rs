@@ -1,31 +1,12 @@
-//! The unbiased arithmetic (issue 9): the dithered merge against its reference formula for
-//! every pair of bytes, scalar and lanes; the exactness the paper has; and the statistical
+//! The unbiased arithmetic (issue 9): the dithered merge against its reference formula
+//! (`mlab-reference`) for every pair of bytes, scalar and lanes; the exactness the paper has; and the statistical
 //! property that motivated it (no transmittance stall on faint layers).
 
 use mlab::lanes::{self, LANES};
 use mlab::{Arithmetic, Paper, Row, Unbiased, mlab as listing1};
-
-/// The documented dither (`docs/layout.md`), written again from its definition.
-fn reference_dither(front: Row, back: Row) -> u32 {
-    let [f0, f1] = front.words();
-    let [b0, b1] = back.words();
-    let x = f0 ^ f1 ^ b0 ^ b1;
-    let s = ((x ^ (x >> 16)) & 0xffff) * 0x6a09 % 65536;
-    s * 255 / 65536
-}
-
-/// The documented unbiased merge, with plain integer division.
-fn reference_merge(front: Row, back: Row) -> Row {
-    let d = reference_dither(front, back);
-    let [fr, fg, fb, ft] = front.rgbt().map(u32::from);
-    let [br, bg, bb, bt] = back.rgbt().map(u32::from);
-    let c = |f: u32, b: u32| (f + (b * ft + 254 - d) / 255).min(255) as u8;
-    Row::new(
-        [c(fr, br), c(fg, bg), c(fb, bb)],
-        ((ft * bt + d) / 255) as u8,
-        front.depth(),
-    )
-}
+// The documented dither and unbiased merge (`docs/layout.md`, `mlab::Unbiased::merge`),
+// written again from their definitions, with plain integer division.
+use mlab_reference::model::{ref_merge_dither as reference_dither, ref_merge_unbiased as reference_merge};
 
 /// Every pair of bytes in every position of the products (front T x back byte), with
 /// depths and the other bytes varying so that the dither takes many values: scalar and

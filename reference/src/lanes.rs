@@ -172,7 +172,10 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
             ensure!(d == q, "the default quantization is not {name}'s: {d:?} vs {q:?}");
         }
         ensure!(q.valid & q.invalid == 0, "lanes both valid and invalid: {q:?}");
-        ensure!(q.valid | q.invalid == mask, "not exactly the lanes of {mask:#010b}: {q:?}");
+        ensure!(
+            q.valid | q.invalid == mask,
+            "not exactly the lanes of {mask:#010b}: {q:?}"
+        );
         for (lane, &(c, a, z)) in raws.iter().enumerate() {
             let on = mask >> lane & 1 == 1;
             let scalar = if straight {
@@ -206,7 +209,10 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
     let q = fl.quantize_with::<A>(mask);
     let mut span = [[Row::EMPTY; LANES]; 2];
     let invalid = lanes::mlab_insert_fragments_with::<A, 2>(&mut span, &fl, mask);
-    ensure!(invalid.0 == q.invalid, "mlab_insert_fragments_with: {invalid:?} vs {q:?}");
+    ensure!(
+        invalid.0 == q.invalid,
+        "mlab_insert_fragments_with: {invalid:?} vs {q:?}"
+    );
     if is_default::<A>() {
         let mut d = [[Row::EMPTY; LANES]; 2];
         let invalid = lanes::mlab_insert_fragments(&mut d, &fl, mask);

@@ -1,76 +1,11 @@
-//! Shared test helpers: the exact per-pixel oracle and stream strategies.
+//! Shared test helpers: stream strategies and the blending-array invariants. The exact
+//! per-pixel oracle, its bounds and the reference arithmetic live in `mlab-reference`
+//! (`reference/`), shared with the fuzz targets and the lab.
 #![allow(dead_code)]
 
 use mlab::glam::Vec3;
-use mlab::{Arithmetic, Fragment, Row};
+use mlab::{Fragment, Row};
 use proptest::prelude::*;
-
-/// One unorm8 rounding: the largest error a single quantization or a single `round(a*b/255)`
-/// can introduce, plus f32 slack (f32 multiply before rounding, f32 resolve).
-pub const DELTA: f64 = 0.5 / 255.0 + 1e-6;
-
-/// The same for the unbiased arithmetic: a dithered quantization `floor(x + u)` with `u` in
-/// `[1/512, 511/512]` and a dithered product `floor((p + d) / 255)` with `d` in `0..=254`
-/// are each off by less than one unit (`q - x` lies in `(-1, 1)`), twice the paper's bound.
-pub const DELTA_UNBIASED: f64 = 1.0 / 255.0 + 1e-6;
-
-/// The rounding bound of an arithmetic: [`DELTA`] for the paper's, [`DELTA_UNBIASED`] for
-/// the dithered one.
-pub fn delta<A: Arithmetic>() -> f64 {
-    if A::NAME == "paper" { DELTA } else { DELTA_UNBIASED }
-}
-
-/// Exact composite of a fragment stream (the oracle): stable sort by depth with later
-/// submission in front on ties, then front to back in f64 over `background`.
-/// Returns the pixel color and the background visibility (product of 1 - alpha).
-pub fn oracle(stream: &[Fragment], background: [f64; 3]) -> ([f64; 3], f64) {
-    let (c, v, _) = oracle_with_bound(stream, background);
-    (c, v)
-}
-
-/// Indices of `stream` in compositing order (front to back, later first on ties).
-pub fn oracle_order(stream: &[Fragment]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..stream.len()).collect();
-    idx.sort_by(|&a, &b| {
-        stream[a]
-            .depth()
-            .partial_cmp(&stream[b].depth())
-            .expect("valid fragments have finite depth")
-            .then(b.cmp(&a))
-    });
-    idx
-}
-
-/// The oracle, plus the quantization bound per channel for an MLAB array with M >= n
-/// rows (or an HT head with K >= n): composing quantized fragments `(p + dp, t + dt)` with
-/// `|dp|, |dt| <= DELTA` front to back gives, by telescoping
-/// `C_j' - C_j = dp_j + dt_j * C_(j+1) + t_j' * (C_(j+1)' - C_(j+1))`,
-/// `|error| <= DELTA * sum_j (1 + C_(j+1))`, where `C_(j+1)` is the exact composite behind
-/// fragment j (background included). For fragments whose color does not exceed alpha and a
-/// background in [0, 1], `C_(j+1) <= 1`, so the bound is at most `2 n DELTA`.
-pub fn oracle_with_bound(stream: &[Fragment], background: [f64; 3]) -> ([f64; 3], f64, [f64; 3]) {
-    oracle_with_bound_delta(stream, background, DELTA)
-}
-
-/// [`oracle_with_bound`] for a rounding bound `delta` per quantization and per product.
-pub fn oracle_with_bound_delta(stream: &[Fragment], background: [f64; 3], delta: f64) -> ([f64; 3], f64, [f64; 3]) {
-    let order = oracle_order(stream);
-    // Back to front: C = p + (1 - a) * C_behind, accumulating the bound.
-    let mut c = background;
-    let mut v = 1.0f64;
-    let mut bound = [0.0f64; 3];
-    for &i in order.iter().rev() {
-        let f = &stream[i];
-        let p = f.color().to_array().map(|x| x as f64);
-        let t = 1.0 - f.alpha() as f64;
-        for ch in 0..3 {
-            bound[ch] += delta * (1.0 + c[ch]);
-            c[ch] = p[ch] + t * c[ch];
-        }
-        v *= t;
-    }
-    (c, v, bound)
-}
 
 /// A fragment from straight color (premultiplied color never exceeds alpha).
 pub fn straight(c: [f32; 3], a: f32, z: f32) -> Fragment {
