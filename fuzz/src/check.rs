@@ -3,8 +3,9 @@
 
 use mlab::{Arithmetic, Fragment, FragmentError, Paper, Resolved, Row, Unbiased};
 
+use crate::defects::defects;
 use crate::input::{Ctor, RawFragment};
-use crate::reference::{DITHERED_QUANT_ERROR, Model, defects, is_faint, ref_quantize_dithered};
+use mlab_reference::model::{DITHERED_QUANT_ERROR, Model, is_faint, ref_quantize_dithered};
 
 /// Build the fragment with the kernel and check it against the defect model:
 /// `Ok` exactly when the arguments have no defect, otherwise one of their defects, with
