@@ -71,10 +71,18 @@ pub fn order<L: Copy + Into<Layer>>(stream: &[L]) -> Vec<usize> {
 /// `(color, background visibility)`, the visibility being the product of `1 - alpha`.
 /// A black background gives the premultiplied color of the transparent layers alone.
 pub fn oracle<L: Copy + Into<Layer>>(stream: &[L], background: [f64; 3]) -> ([f64; 3], f64) {
+    composite(order(stream).into_iter().map(|i| stream[i]), background)
+}
+
+/// The composite half of [`oracle`], for layers already in compositing order (front to
+/// back, as [`order`] gives them): `C += V c_i`, `V *= 1 - a_i`, then `C + V background`,
+/// in f64. For a caller that sorts once and times its sort apart (the lab's A-buffer);
+/// the order is then the caller's to get right.
+pub fn composite<L: Into<Layer>>(front_to_back: impl IntoIterator<Item = L>, background: [f64; 3]) -> ([f64; 3], f64) {
     let mut c = [0.0f64; 3];
     let mut v = 1.0f64;
-    for i in order(stream) {
-        let l: Layer = stream[i].into();
+    for l in front_to_back {
+        let l: Layer = l.into();
         for (ch, &p) in c.iter_mut().zip(&l.color) {
             *ch += f64::from(p) * v;
         }
@@ -200,6 +208,14 @@ mod tests {
         assert_eq!(c, [0.125 + 0.75 * 0.25 + 0.375; 3]);
         // Empty: the background, visibility 1.
         assert_eq!(oracle::<Layer>(&[], [0.2, 0.3, 0.4]), ([0.2, 0.3, 0.4], 1.0));
+        // The composite half takes the order as given: the same layers front to back.
+        let sorted = order(&s).into_iter().map(|i| s[i]);
+        assert_eq!(composite(sorted, [1.0; 3]), (c, v));
+        assert_ne!(
+            composite(s, [1.0; 3]),
+            (c, v),
+            "submission order is not depth order here"
+        );
     }
 
     #[test]
