@@ -22,6 +22,7 @@ use mlab::lanes::{self, HybridSpan, LANES, ResolvedLanes};
 use mlab::{
     Arithmetic, Fragment, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased,
 };
+use mlab_reference::Layer;
 
 /// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
 /// visibility of the background (the product of transmittances the method ends up with).
@@ -372,19 +373,24 @@ fn over_bg(c: [f32; 3], t: f32, bg: [f32; 3]) -> [f32; 3] {
     [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t]
 }
 
-/// The exact reference: front to back in f64, `C += T * c`, `T *= 1 - a`, then `C + T * bg`.
+/// The exact reference: `mlab_reference::oracle::composite`, the oracle the kernel's tests
+/// and fuzz targets use, over each pixel's fragments as the A-buffer sorted them
+/// ([`Frame::sorted`]: front to back, later submission first on equal depth, the oracle's
+/// order; the sort is timed apart as `sort_seconds`): in f64 `C += T * c`, `T *= 1 - a`,
+/// then `C + T * bg`.
 fn reference(frame: &Frame) -> Image {
-    let (frags, bg) = (&frame.stream.frags, frame.bg());
+    let (frags, bg) = (&frame.stream.frags, frame.bg().map(f64::from));
     per_pixel(frame, |p| {
-        let (mut c, mut t) = ([0.0f64; 3], 1.0f64);
-        for &i in frame.sorted.of(p) {
+        let layers = frame.sorted.of(p).iter().map(|&i| {
             let f = &frags[i as usize];
-            for k in 0..3 {
-                c[k] += t * f.color[k] as f64;
+            Layer {
+                color: f.color,
+                alpha: f.alpha,
+                depth: f.depth,
             }
-            t *= 1.0 - f.alpha as f64;
-        }
-        (std::array::from_fn(|k| (c[k] + t * bg[k] as f64) as f32), t as f32)
+        });
+        let (c, t) = mlab_reference::oracle::composite(layers, bg);
+        (c.map(|x| x as f32), t as f32)
     })
 }
 
