@@ -17,6 +17,13 @@
 //! `src/arith.rs`, `src/unorm.rs`, the tail tables of `src/tail.rs`, `docs/algorithm.md` and
 //! `docs/layout.md`, and the models are checked against the literal examples of those docs
 //! (`cargo test -p mlab-reference`), so that a reference cannot drift along with the kernel.
+//!
+//! What it replaced (issue 13 item 6): the exact oracle in `tests/common/mod.rs`
+//! (`oracle`, `oracle_order`, `oracle_with_bound(_delta)`), `fuzz/src/reference.rs`
+//! (`oracle`, `sort_front_to_back`), `lab/src/methods.rs` (`reference`'s composite),
+//! `examples/rasterizer.rs` (`composite`); the reference merge and dither of
+//! `tests/unbiased.rs`; the lanes checks of `tests/lanes.rs` and `fuzz/src/targets.rs`.
+//! `examples/quickstart.rs` keeps its few lines so that it stands alone.
 
 pub mod lanes;
 pub mod model;
