@@ -750,39 +750,52 @@ mod tests {
         Row::new(c.map(|v| v as u8), (255 - a) as u8, 1.0).to_le_u64()
     }
 
+    /// Four rows for byte `x`: as `x` runs over 0..256 each lane's color and alpha bytes take
+    /// every value; lane 3 is the invisible row (no color, T = 255) when `x == 0`.
+    fn rows4(x: u32) -> [u64; 4] {
+        [
+            row([x, x ^ 0x81, 255 - x], x),
+            row([255 - x, x, x], 255 - x),
+            row([x, 0, x], x ^ 0xf0),
+            row([x; 3], x),
+        ]
+    }
+
+    /// `add` on four tails and the rows of [`rows4`]`(x)` against `want(lane, [R, G, B, alpha])`
+    /// for visible rows; invisible rows leave the tail unchanged.
+    fn check_tail_add(add: fn(u32x8, u32x8) -> u32x8, tails: [u64; 4], x: u32, want: impl Fn(usize, [u64; 4]) -> u64) {
+        let rows = rows4(x);
+        let got = unpack(add(pack(tails), pack(rows)));
+        for i in 0..4 {
+            let r = Row::from_le_u64(rows[i]);
+            let [cr, cg, cb, t] = r.rgbt().map(u64::from);
+            let expected = if r.is_invisible() {
+                tails[i]
+            } else {
+                want(i, [cr, cg, cb, 255 - t])
+            };
+            assert_eq!(got[i], expected, "tail {:#x}, row {:#x}", tails[i], rows[i]);
+        }
+    }
+
     /// The wide tail add: every (field value, byte) pair of every field (colors 0..8192,
     /// alpha 0..16384, count 0..2048 with a visible row), and invisible rows skipped.
     #[test]
     fn tail_add4_wide_is_exact_for_every_operand_pair() {
         let tail = |c: [u64; 3], a: u64, n: u64| c[0] | c[1] << 13 | c[2] << 26 | a << 39 | n << 53;
         for s0 in (0..16384u64).step_by(4) {
+            let ss = [s0, s0 + 1, s0 + 2, s0 + 3];
+            let cs = ss.map(|s| [s & 8191, (s * 3 + 1) & 8191, (s ^ 8191) & 8191]);
+            let tails: [u64; 4] = core::array::from_fn(|i| tail(cs[i], ss[i], ss[i] & 2047));
             for x in 0..256u32 {
-                let ss = [s0, s0 + 1, s0 + 2, s0 + 3];
-                let cs = ss.map(|s| [s & 8191, (s * 3 + 1) & 8191, (s ^ 8191) & 8191]);
-                let tails: [u64; 4] = core::array::from_fn(|i| tail(cs[i], ss[i], ss[i] & 2047));
-                // Lane 3 keeps an invisible row whenever x == 0.
-                let rows = [
-                    row([x, x ^ 0x81, 255 - x], x),
-                    row([255 - x, x, x], 255 - x),
-                    row([x, 0, x], x ^ 0xf0),
-                    row([x; 3], x),
-                ];
-                let got = unpack(tail_add4_wide(pack(tails), pack(rows)));
-                for i in 0..4 {
-                    let r = Row::from_le_u64(rows[i]);
-                    let [cr, cg, cb, t] = r.rgbt().map(u64::from);
-                    let want = if r.is_invisible() {
-                        tails[i]
-                    } else {
-                        let c = cs[i];
-                        tail(
-                            [sat(c[0], cr, 8191), sat(c[1], cg, 8191), sat(c[2], cb, 8191)],
-                            sat(ss[i], 255 - t, 16383),
-                            sat(ss[i] & 2047, 1, 2047),
-                        )
-                    };
-                    assert_eq!(got[i], want, "tail {:#x}, row {:#x}", tails[i], rows[i]);
-                }
+                check_tail_add(tail_add4_wide, tails, x, |i, [r, g, b, a]| {
+                    let c = cs[i];
+                    tail(
+                        [sat(c[0], r, 8191), sat(c[1], g, 8191), sat(c[2], b, 8191)],
+                        sat(ss[i], a, 16383),
+                        sat(ss[i] & 2047, 1, 2047),
+                    )
+                });
             }
         }
     }
@@ -795,33 +808,19 @@ mod tests {
         let tail =
             |c: [u64; 3], spare: u64, a: u64, n: u64| c[0] | c[1] << 10 | c[2] << 20 | spare << 30 | a << 32 | n << 48;
         for s0 in (0..65536u64).step_by(4) {
+            let ss = [s0, s0 + 1, s0 + 2, s0 + 3];
+            let cs = ss.map(|s| [s & 1023, (s >> 6) & 1023, (s ^ 1023) & 1023]);
+            let tails: [u64; 4] = core::array::from_fn(|i| tail(cs[i], ss[i] & 3, ss[i], 65535 - ss[i]));
             for x in 0..256u32 {
-                let ss = [s0, s0 + 1, s0 + 2, s0 + 3];
-                let cs = ss.map(|s| [s & 1023, (s >> 6) & 1023, (s ^ 1023) & 1023]);
-                let tails: [u64; 4] = core::array::from_fn(|i| tail(cs[i], ss[i] & 3, ss[i], 65535 - ss[i]));
-                let rows = [
-                    row([x, x ^ 0x81, 255 - x], x),
-                    row([255 - x, x, x], 255 - x),
-                    row([x, 0, x], x ^ 0xf0),
-                    row([x; 3], x),
-                ];
-                let got = unpack(tail_add4_paper(pack(tails), pack(rows)));
-                for i in 0..4 {
-                    let r = Row::from_le_u64(rows[i]);
-                    let [cr, cg, cb, t] = r.rgbt().map(u64::from);
-                    let want = if r.is_invisible() {
-                        tails[i]
-                    } else {
-                        let c = cs[i];
-                        tail(
-                            [sat(c[0], cr, 1023), sat(c[1], cg, 1023), sat(c[2], cb, 1023)],
-                            ss[i] & 3,
-                            sat(ss[i], 255 - t, 65535),
-                            sat(65535 - ss[i], 1, 65535),
-                        )
-                    };
-                    assert_eq!(got[i], want, "tail {:#x}, row {:#x}", tails[i], rows[i]);
-                }
+                check_tail_add(tail_add4_paper, tails, x, |i, [r, g, b, a]| {
+                    let c = cs[i];
+                    tail(
+                        [sat(c[0], r, 1023), sat(c[1], g, 1023), sat(c[2], b, 1023)],
+                        ss[i] & 3,
+                        sat(ss[i], a, 65535),
+                        sat(65535 - ss[i], 1, 65535),
+                    )
+                });
             }
         }
     }
