@@ -26,8 +26,10 @@ trap 'rm -rf "$scratch"' EXIT
 start=$SECONDS
 
 # build_backend TARGET_DIR RUSTFLAGS
+# 16 codegen units (cargo-fuzz's default is 1): the build takes about a fifth less; the
+# fuzzers run slightly slower.
 build_backend() {
-  RUSTFLAGS="$2" cargo fuzz build --sanitizer none --target-dir "$1"
+  RUSTFLAGS="$2" cargo fuzz build --sanitizer none --codegen-units 16 --target-dir "$1"
 }
 
 # run_target NAME TARGET_DIR RUSTFLAGS TARGET: one bounded fuzz run; prints one line.
@@ -35,7 +37,7 @@ run_target() {
   local name="$1" dir="$2" flags="$3" t="$4"
   mkdir -p "$scratch/$name/$t"
   local log="$scratch/$name/$t.log"
-  if ! RUSTFLAGS="$flags" cargo fuzz run --sanitizer none --target-dir "$dir" "$t" \
+  if ! RUSTFLAGS="$flags" cargo fuzz run --sanitizer none --codegen-units 16 --target-dir "$dir" "$t" \
       "$scratch/$name/$t" "corpus/$t" -- \
       -max_total_time="$SECS" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 >"$log" 2>&1; then
     echo "FAILED: $t on $name"
