@@ -21,6 +21,7 @@ use mlab::{
     Background, Fragment, Framebuffer, HybridFramebuffer, HybridSpanFramebuffer, MlabFramebuffer, Row, SpanBatcher,
     SpanFramebuffer,
 };
+use mlab_reference::Rng;
 use std::hint::black_box;
 
 #[path = "../examples/common/raster.rs"]
@@ -30,27 +31,14 @@ mod raster;
 /// One pixel event: pixel and a validated fragment.
 type Event = (u32, u32, Fragment);
 
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
-
 /// Random rectangles up to 48 x 24 pixels, one fragment per covered pixel, with a slight
 /// depth gradient along x; 65536 fragments.
 fn coherent(w: u32, h: u32) -> Vec<Event> {
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
     let mut out = Vec::new();
     while out.len() < 65536 {
-        let (x0, y0) = ((rng.next() % w as u64) as u32, (rng.next() % h as u64) as u32);
-        let (rw, rh) = (1 + (rng.next() % 48) as u32, 1 + (rng.next() % 24) as u32);
+        let (x0, y0) = ((rng.next_u64() % w as u64) as u32, (rng.next_u64() % h as u64) as u32);
+        let (rw, rh) = (1 + (rng.next_u64() % 48) as u32, 1 + (rng.next_u64() % 24) as u32);
         let z0 = 100.0 * rng.unit();
         let c = Vec3::new(rng.unit(), rng.unit(), rng.unit());
         let alpha = 0.1 + 0.8 * rng.unit();

@@ -19,6 +19,7 @@ use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
 use mlab::{
     Arithmetic, Background, Paper, Row, TailFormat, Unbiased, hybrid, mlab as listing1, resolve_rows, to_rgba8,
 };
+use mlab_reference::Rng;
 use std::hint::black_box;
 use wide::{u8x32, u16x16, u32x8};
 
@@ -27,19 +28,6 @@ const H: usize = 128;
 const SPANS: usize = W * H / LANES;
 /// Spans of the small target (32 x 32 pixels, 32 KiB of rows at M = 4: in L1).
 const SMALL_SPANS: usize = 32 * 32 / LANES;
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 /// One span operation: span index, one row per lane, coverage mask.
 #[derive(Clone, Copy)]
@@ -59,7 +47,7 @@ fn random_stream(spans: usize) -> Vec<Step> {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     (0..8192)
         .map(|_| {
-            let span = (rng.next() % spans as u64) as usize;
+            let span = (rng.next_u64() % spans as u64) as usize;
             let rows = core::array::from_fn(|_| {
                 let z = 100.0 * rng.unit();
                 fragment_row(&mut rng, z)
@@ -73,8 +61,11 @@ fn coherent_stream() -> Vec<Step> {
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
     let mut steps = Vec::new();
     while steps.len() < 8192 {
-        let (x0, y0) = ((rng.next() % W as u64) as usize, (rng.next() % H as u64) as usize);
-        let (w, h) = (1 + (rng.next() % 48) as usize, 1 + (rng.next() % 24) as usize);
+        let (x0, y0) = (
+            (rng.next_u64() % W as u64) as usize,
+            (rng.next_u64() % H as u64) as usize,
+        );
+        let (w, h) = (1 + (rng.next_u64() % 48) as usize, 1 + (rng.next_u64() % 24) as usize);
         let z0 = 100.0 * rng.unit();
         let row = fragment_row(&mut rng, z0);
         for y in y0..(y0 + h).min(H) {

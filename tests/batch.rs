@@ -10,25 +10,10 @@ use mlab::{
     HybridSpanFramebuffer, Layers, MlabFramebuffer, Paper, Row, SpanBatcher, SpanFramebuffer, Unbiased, to_rgba8,
     to_rgba16f,
 };
+use mlab_reference::Rng;
 
 /// More iterations in release (as BLAKE3's tests do).
 const ROUNDS: usize = if cfg!(debug_assertions) { 6 } else { 40 };
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: u64) -> u64 {
-        self.next() % n.max(1)
-    }
-    fn unit(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
-    }
-}
 
 /// What a pixel event pushes: a fragment, or an already quantized row.
 #[derive(Clone, Copy, Debug)]
@@ -62,7 +47,7 @@ fn stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<(u32, u32, Item)> {
     while out.len() < n {
         let item = |rng: &mut Rng| {
             if rng.below(16) == 0 {
-                return Item::Row(Row::from_le_u64(rng.next()));
+                return Item::Row(Row::from_le_u64(rng.next_u64()));
             }
             let z = if rng.below(4) == 0 { 1.0 } else { 10.0 * rng.unit() };
             let alpha = if rng.below(4) == 0 {

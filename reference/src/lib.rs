@@ -28,6 +28,8 @@
 pub mod lanes;
 pub mod model;
 pub mod oracle;
+pub mod rng;
 
 pub use model::Model;
 pub use oracle::{DELTA, DELTA_UNBIASED, Layer, oracle, oracle_with_bound};
+pub use rng::Rng;
