@@ -1,0 +1,178 @@
+//! MLAB and HT through the kernel's pixel-major framebuffers, fragment by fragment in
+//! submission order, and the one place where the lab's [`Arith`] picks the kernel's
+//! arithmetic type (`*_with`).
+
+use super::{Frame, HT_SIZES, Image, MLAB_SIZES};
+use mlab::glam::Vec3;
+use mlab::{
+    Arithmetic, Fragment, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased,
+};
+
+/// The kernel's arithmetic (issue 9): how MLAB's merge rounds its unorm8 products, how a
+/// fragment is quantized to a row, and the HT tail's layout: `mlab::Paper` or
+/// `mlab::Unbiased`. The lab turns it into the kernel's type in one place, the `*_with`
+/// functions of this module ([`mlab_with`], [`hybrid_with`], ...).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Arith {
+    /// The paper's: products and fragments rounded to nearest, the 3 x 10-bit tail.
+    Paper,
+    /// The unbiased one: dithered rounding, a tail that does not saturate on dense content.
+    Unbiased,
+}
+
+impl Arith {
+    /// Both, paper first.
+    pub const ALL: [Arith; 2] = [Arith::Paper, Arith::Unbiased];
+
+    /// `"paper"` or `"unbiased"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Arith::Paper => "paper",
+            Arith::Unbiased => "unbiased",
+        }
+    }
+}
+
+impl Arith {
+    /// The kernel's default arithmetic (what `MlabFramebuffer::<M>` and the other kernel
+    /// types use when none is named), which [`Method::Mlab`] and the other kernel methods
+    /// without an arithmetic run.
+    pub const DEFAULT: Arith = Arith::Unbiased;
+
+    /// A validated fragment quantized to a row as this arithmetic quantizes it.
+    pub fn quantize(self, fragment: &Fragment) -> Row {
+        match self {
+            Arith::Paper => Paper::quantize(fragment),
+            Arith::Unbiased => Unbiased::quantize(fragment),
+        }
+    }
+}
+
+fn kernel_image(frame: &Frame, resolve: impl Fn(u32, u32) -> Result<Resolved, String>) -> Result<Image, String> {
+    let s = frame.stream;
+    let bg = Vec3::from(s.background);
+    let mut rgb = Vec::with_capacity(s.pixels());
+    let mut vis = Vec::with_capacity(s.pixels());
+    for y in 0..s.height {
+        for x in 0..s.width {
+            let r = resolve(x, y)?;
+            rgb.push(r.over(bg).to_array());
+            vis.push(r.transmittance);
+        }
+    }
+    Ok(Image {
+        width: s.width,
+        height: s.height,
+        rgb,
+        vis,
+    })
+}
+
+pub(super) fn err(e: impl std::fmt::Display) -> String {
+    e.to_string()
+}
+
+/// MLAB with the kernel's framebuffer view in arithmetic `A`, in submission order (or, when
+/// `sorted`, each pixel's fragments front to back).
+pub fn run_mlab<const M: usize, A: Arithmetic>(frame: &Frame, sorted: bool) -> Result<Image, String> {
+    let s = frame.stream;
+    let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M, A>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = MlabFramebuffer::<M, A>::new(&mut storage, s.width, s.height).map_err(err)?;
+    fb.clear();
+    let insert = |fb: &mut MlabFramebuffer<M, A>, i: usize| -> Result<(), String> {
+        let f = &s.frags[i];
+        let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
+        fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)
+    };
+    if sorted {
+        for &i in &frame.sorted.index {
+            insert(&mut fb, i as usize)?;
+        }
+    } else {
+        for i in 0..s.frags.len() {
+            insert(&mut fb, i)?;
+        }
+    }
+    kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
+}
+
+/// Hybrid Transparency with the kernel's framebuffer view in arithmetic `A` (which picks the
+/// tail), in submission order; also the number of pixels whose tail has a field at its
+/// maximum (`saturated`).
+pub fn run_hybrid<const K: usize, A: Arithmetic>(frame: &Frame) -> Result<(Image, usize), String> {
+    let s = frame.stream;
+    let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K, A>::rows_needed(s.width, s.height).map_err(err)?];
+    let mut fb = HybridFramebuffer::<K, A>::new(&mut storage, s.width, s.height).map_err(err)?;
+    // The tail slot of `Row::EMPTY` bytes is not an empty tail: clear for a new frame.
+    fb.clear();
+    for (i, f) in s.frags.iter().enumerate() {
+        let frag = f.to_kernel().map_err(|e| format!("fragment {i}: {e}"))?;
+        fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)?;
+    }
+    let mut saturated = 0;
+    for y in 0..s.height {
+        for x in 0..s.width {
+            saturated += usize::from(fb.pixel(x, y).map_err(err)?.1.saturated());
+        }
+    }
+    Ok((kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))?, saturated))
+}
+
+fn mlab_dyn<A: Arithmetic>(m: usize, frame: &Frame, sorted: bool) -> Result<Image, String> {
+    match m {
+        1 => run_mlab::<1, A>(frame, sorted),
+        2 => run_mlab::<2, A>(frame, sorted),
+        3 => run_mlab::<3, A>(frame, sorted),
+        4 => run_mlab::<4, A>(frame, sorted),
+        5 => run_mlab::<5, A>(frame, sorted),
+        6 => run_mlab::<6, A>(frame, sorted),
+        7 => run_mlab::<7, A>(frame, sorted),
+        8 => run_mlab::<8, A>(frame, sorted),
+        12 => run_mlab::<12, A>(frame, sorted),
+        16 => run_mlab::<16, A>(frame, sorted),
+        _ => Err(format!("MLAB {m}: supported row counts are {MLAB_SIZES:?}")),
+    }
+}
+
+fn hybrid_dyn<A: Arithmetic>(k: usize, frame: &Frame) -> Result<(Image, usize), String> {
+    match k {
+        0 => run_hybrid::<0, A>(frame),
+        1 => run_hybrid::<1, A>(frame),
+        2 => run_hybrid::<2, A>(frame),
+        3 => run_hybrid::<3, A>(frame),
+        4 => run_hybrid::<4, A>(frame),
+        5 => run_hybrid::<5, A>(frame),
+        6 => run_hybrid::<6, A>(frame),
+        7 => run_hybrid::<7, A>(frame),
+        11 => run_hybrid::<11, A>(frame),
+        15 => run_hybrid::<15, A>(frame),
+        _ => Err(format!("HT {k}: supported head sizes are {HT_SIZES:?}")),
+    }
+}
+
+// The one place where the lab's `Arith` picks the kernel's arithmetic type.
+
+/// MLAB `m` with arithmetic `arith` (scalar kernel), in submission order.
+pub fn mlab_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+    match arith {
+        Arith::Paper => mlab_dyn::<Paper>(m, frame, false),
+        Arith::Unbiased => mlab_dyn::<Unbiased>(m, frame, false),
+    }
+}
+
+/// MLAB `m` with arithmetic `arith`, fed each pixel's fragments front to back.
+pub fn mlab_sorted_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+    match arith {
+        Arith::Paper => mlab_dyn::<Paper>(m, frame, true),
+        Arith::Unbiased => mlab_dyn::<Unbiased>(m, frame, true),
+    }
+}
+
+/// HT `k` with arithmetic `arith` (scalar kernel): the image and the number of pixels with a
+/// saturated tail.
+pub fn hybrid_with(k: usize, arith: Arith, frame: &Frame) -> Result<(Image, usize), String> {
+    match arith {
+        Arith::Paper => hybrid_dyn::<Paper>(k, frame),
+        Arith::Unbiased => hybrid_dyn::<Unbiased>(k, frame),
+    }
+}

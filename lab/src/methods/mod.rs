@@ -1,0 +1,271 @@
+//! The compositing methods, each a function from a frame's fragment stream to an image.
+//!
+//! Every method sees the same [`Frame`]: the stream in submission order, the fragments
+//! grouped per pixel in submission order ([`Frame::bins`]) and sorted front to back
+//! ([`Frame::sorted`], what an application that sorts would submit). Render targets are
+//! emulated at their storage precision: `RGBA16F` rounds every blend result to IEEE half
+//! ([`f16r`]), `R8` rounds to the nearest of 256 levels after every blend ([`r8_blend`]).
+//!
+//! MLAB and HT run in the kernel (`mlab`) through its framebuffer views, fragment by
+//! fragment in submission order, as a pixel shader would. A lane (SIMD) variant of the
+//! kernel becomes one more [`Method`] variant whose `render` calls it; see
+//! [`Method::standard_list`].
+
+//! The files: [`reference`] the exact A-buffer; [`kernel`] MLAB and HT through the kernel's
+//! framebuffers, and the one place where the lab's [`Arith`] picks the kernel's arithmetic
+//! type; [`lanes`] the same kernels through 8-pixel span inserts; [`baselines`] OVER, UNDER,
+//! WBOIT, Bavoil-Myers and Meshkin with the render-target formulas they share with
+//! [`crate::tiled`]; [`adaptive`] Adaptive Transparency. Everything public is re-exported
+//! here (`oit_lab::methods::over_step`, ...).
+
+pub mod adaptive;
+pub mod baselines;
+pub mod kernel;
+pub mod lanes;
+pub mod reference;
+
+pub use adaptive::{Visibility, at_first_removable};
+pub use baselines::{UNDER_THRESHOLD, Weight, f16r, over_step, r8_blend, wboit_resolve, wboit_step};
+pub use kernel::{Arith, hybrid_with, mlab_sorted_with, mlab_with, run_hybrid, run_mlab};
+pub use lanes::{hybrid_lanes_with, mlab_lanes_with};
+
+use crate::stream::{Bins, Stream};
+use adaptive::adaptive;
+use baselines::{bavoil_myers, meshkin, over, under, wboit};
+use reference::reference;
+
+/// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
+/// visibility of the background (the product of transmittances the method ends up with).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Linear RGB, row major.
+    pub rgb: Vec<[f32; 3]>,
+    /// Background visibility in `[0, 1]` (Meshkin's is `1 - sum(alpha)`, negative past full
+    /// opacity).
+    pub vis: Vec<f32>,
+}
+
+/// A stream prepared for compositing.
+pub struct Frame<'a> {
+    /// The stream.
+    pub stream: &'a Stream,
+    /// Fragment indices per pixel, in submission order.
+    pub bins: Bins,
+    /// Fragment indices per pixel, front to back (later submission first on equal depth).
+    pub sorted: Bins,
+    /// Seconds spent sorting (part of the A-buffer's cost).
+    pub sort_seconds: f64,
+    /// Near and far depth for the window-space depth of WBOIT's Eq. 10: the stream's
+    /// depth range widened by 10% on each side.
+    pub near_far: (f32, f32),
+}
+
+impl<'a> Frame<'a> {
+    /// Group and sort the stream. The stream must be valid ([`Stream::validate`]);
+    /// otherwise rendering with the kernel methods returns an error.
+    pub fn new(stream: &'a Stream) -> Frame<'a> {
+        let bins = Bins::new(stream);
+        let t = std::time::Instant::now();
+        let sorted = bins.sorted(stream);
+        let sort_seconds = t.elapsed().as_secs_f64();
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for f in &stream.frags {
+            lo = lo.min(f.depth);
+            hi = hi.max(f.depth);
+        }
+        let near_far = if lo > 0.0 && hi.is_finite() {
+            (lo / 1.1, hi * 1.1)
+        } else {
+            (0.0, 1.0)
+        };
+        Frame {
+            stream,
+            bins,
+            sorted,
+            sort_seconds,
+            near_far,
+        }
+    }
+
+    fn bg(&self) -> [f32; 3] {
+        self.stream.background
+    }
+}
+
+/// MLAB row counts the lab can run (const generics are instantiated for these).
+pub const MLAB_SIZES: [usize; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 12, 16];
+/// HT head sizes the lab can run.
+pub const HT_SIZES: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 11, 15];
+
+/// A compositing method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// Exact: every fragment kept, sorted per pixel, composited front to back in f64.
+    Reference,
+    /// MLAB (kernel, scalar) with `M` rows.
+    Mlab(usize),
+    /// MLAB (kernel, scalar) with `M` rows, fed each pixel's fragments front to back (the
+    /// sorted stream): no fragment ever lands between merged rows, so what is left is the
+    /// 8-bit quantization (a check of the paper's claim about the merge).
+    MlabSorted(usize),
+    /// Hybrid Transparency (kernel, scalar) with `K` head rows and a tail.
+    Hybrid(usize),
+    /// MLAB (kernel, scalar) with `M` rows and the given arithmetic ([`Method::Mlab`] is the
+    /// kernel's default arithmetic).
+    MlabWith(usize, Arith),
+    /// HT (kernel, scalar) with `K` head rows and the given arithmetic (its tail included).
+    HybridWith(usize, Arith),
+    /// MLAB with `M` rows through the kernel's 8-pixel lanes (`mlab::lanes`); must give the
+    /// same image as [`Method::Mlab`] bit for bit.
+    MlabLanes(usize),
+    /// HT with `K` head rows through the kernel's 8-pixel lanes.
+    HybridLanes(usize),
+    /// OVER in submission order into an `RGBA16F` target (unsorted alpha blending, "AB").
+    Over,
+    /// UNDER, front to back over the sorted stream, `RGBA16F`, transmittance thresholding.
+    Under,
+    /// Weighted Blended OIT with a weight function: `RGBA16F` accumulation + `R8` revealage.
+    Wboit(Weight),
+    /// Bavoil-Myers weighted average: `RGBA16F` sums + `R32F` count.
+    BavoilMyers,
+    /// Meshkin's sort-independent blend (first-order terms): `RGBA16F` sums.
+    Meshkin,
+    /// Adaptive Transparency with `N` visibility nodes, two passes.
+    Adaptive(usize),
+}
+
+impl Method {
+    /// The methods of the main job, in table order. A lanes variant of the kernel goes here
+    /// as one more entry per size (for example `Method::MlabLanes(m)` after `Method::Mlab(m)`).
+    pub fn standard_list() -> Vec<Method> {
+        let mut v = vec![Method::Over, Method::Under];
+        for m in [1, 2, 4, 8] {
+            v.push(Method::Mlab(m));
+        }
+        for m in [1, 2, 4, 8] {
+            v.push(Method::Hybrid(m - 1));
+        }
+        v.push(Method::MlabLanes(4));
+        v.push(Method::HybridLanes(3));
+        v.push(Method::MlabSorted(1));
+        v.push(Method::MlabSorted(4));
+        for n in [2, 4, 8] {
+            v.push(Method::Adaptive(n));
+        }
+        v.extend(Weight::ALL.map(Method::Wboit));
+        v.push(Method::BavoilMyers);
+        v.push(Method::Meshkin);
+        v
+    }
+
+    /// Display name.
+    pub fn name(self) -> String {
+        match self {
+            Method::Reference => "A-buffer".into(),
+            Method::Mlab(m) => format!("MLAB {m}"),
+            Method::MlabSorted(m) => format!("MLAB {m} sorted"),
+            Method::MlabLanes(m) => format!("MLAB {m} lanes"),
+            Method::HybridLanes(k) => format!("HT {k} lanes"),
+            Method::Hybrid(k) => format!("HT {k}"),
+            Method::MlabWith(m, a) => format!("MLAB {m} {}", a.name()),
+            Method::HybridWith(k, a) => format!("HT {k} {}", a.name()),
+            Method::Over => "OVER unsorted".into(),
+            Method::Under => "UNDER sorted".into(),
+            Method::Wboit(w) => w.label().into(),
+            Method::BavoilMyers => "Bavoil-Myers".into(),
+            Method::Meshkin => "Meshkin".into(),
+            Method::Adaptive(n) => format!("AT {n}"),
+        }
+    }
+
+    /// A file-name friendly name.
+    pub fn slug(self) -> String {
+        self.name()
+            .to_ascii_lowercase()
+            .replace([' ', '.'], "_")
+            .replace("__", "_")
+    }
+
+    /// Memory per pixel in bytes. For the A-buffer: 12 bytes per stored fragment (RGBA8,
+    /// f32 depth, 32-bit next pointer) plus a 4-byte head pointer, averaged over the frame.
+    pub fn bytes_per_pixel(self, frame: &Frame) -> f64 {
+        match self {
+            Method::Reference => 4.0 + 12.0 * frame.stream.frags.len() as f64 / frame.stream.pixels().max(1) as f64,
+            Method::Mlab(m) | Method::MlabSorted(m) | Method::MlabLanes(m) | Method::MlabWith(m, _) => 8.0 * m as f64,
+            Method::Hybrid(k) | Method::HybridLanes(k) | Method::HybridWith(k, _) => 8.0 * (k + 1) as f64,
+            Method::Over | Method::Under | Method::Meshkin => 8.0,
+            Method::Wboit(_) => 9.0,
+            Method::BavoilMyers => 12.0,
+            Method::Adaptive(n) => 8.0 * n as f64 + 8.0,
+        }
+    }
+
+    /// Render the frame. Errors only for a stream the kernel refuses or an unsupported size.
+    pub fn render(self, frame: &Frame) -> Result<Image, String> {
+        match self {
+            Method::Reference => Ok(reference(frame)),
+            Method::Mlab(m) => mlab_with(m, Arith::DEFAULT, frame),
+            Method::MlabSorted(m) => mlab_sorted_with(m, Arith::DEFAULT, frame),
+            Method::MlabLanes(m) => mlab_lanes_with(m, Arith::DEFAULT, frame),
+            Method::HybridLanes(k) => hybrid_lanes_with(k, Arith::DEFAULT, frame),
+            Method::Hybrid(k) => hybrid_with(k, Arith::DEFAULT, frame).map(|(image, _)| image),
+            Method::MlabWith(m, a) => mlab_with(m, a, frame),
+            Method::HybridWith(k, a) => hybrid_with(k, a, frame).map(|(image, _)| image),
+            Method::Over => Ok(over(frame)),
+            Method::Under => Ok(under(frame)),
+            Method::Wboit(w) => Ok(wboit(frame, w)),
+            Method::BavoilMyers => Ok(bavoil_myers(frame)),
+            Method::Meshkin => Ok(meshkin(frame)),
+            Method::Adaptive(0) => Err("AT needs at least one node".into()),
+            Method::Adaptive(n) => Ok(adaptive(frame, n)),
+        }
+    }
+}
+
+/// Run `f` for every pixel, on all cores, and collect the image.
+fn per_pixel<F>(frame: &Frame, f: F) -> Image
+where
+    F: Fn(usize) -> ([f32; 3], f32) + Sync,
+{
+    let s = frame.stream;
+    let n = s.pixels();
+    let mut rgb = vec![[0.0f32; 3]; n];
+    let mut vis = vec![0.0f32; n];
+    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
+    let chunk = n.div_ceil(threads * 8).max(1024);
+    let work: Vec<_> = rgb.chunks_mut(chunk).zip(vis.chunks_mut(chunk)).enumerate().collect();
+    let work = std::sync::Mutex::new(work);
+    std::thread::scope(|scope| {
+        let (f, work) = (&f, &work);
+        for _ in 0..threads {
+            scope.spawn(move || {
+                loop {
+                    let item = work.lock().map(|mut w| w.pop()).ok().flatten();
+                    let Some((ci, (rc, vc))) = item else { break };
+                    for (j, (r, v)) in rc.iter_mut().zip(vc.iter_mut()).enumerate() {
+                        (*r, *v) = f(ci * chunk + j);
+                    }
+                }
+            });
+        }
+    });
+    Image {
+        width: s.width,
+        height: s.height,
+        rgb,
+        vis,
+    }
+}
+
+fn over_bg(c: [f32; 3], t: f32, bg: [f32; 3]) -> [f32; 3] {
+    [c[0] + bg[0] * t, c[1] + bg[1] * t, c[2] + bg[2] * t]
+}
+
+/// Non-finite results (a half target that overflowed: inf / inf) are shown black.
+fn finite_or_zero(x: f32) -> f32 {
+    if x.is_finite() { x } else { 0.0 }
+}
