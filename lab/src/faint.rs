@@ -2,7 +2,7 @@
 //! pixel's fragments beyond the nearest `K`), fragments per covered pixel, and the report of
 //! `oit-lab faint` (MLAB and HT at equal memory, both arithmetics, against unsorted OVER).
 
-use crate::methods::{Arith, Frame, Image, Method, hybrid_with};
+use crate::methods::{Arith, BinnedStream, Image, Method, hybrid_with};
 use crate::metrics::{Covered, Quality, compare, compare_covered};
 use crate::scenes::Scene;
 use crate::stream::Stream;
@@ -20,9 +20,9 @@ pub struct Depth {
 }
 
 /// Fragments per covered pixel of a frame.
-pub fn depth(frame: &Frame) -> Depth {
+pub fn depth(binned: &BinnedStream) -> Depth {
     let (mut covered, mut total, mut max) = (0usize, 0usize, 0usize);
-    for w in frame.bins.start.windows(2) {
+    for w in binned.bins.start.windows(2) {
         let n = (w[1] - w[0]) as usize;
         if n > 0 {
             covered += 1;
@@ -57,11 +57,11 @@ pub struct TailSums {
 /// submission in front on equal depth, as HT's head keeps them), each quantized to a row as
 /// the kernel quantizes it in arithmetic `arith`; rows that carry neither color nor opacity
 /// are not counted, as the kernel's tail skips them. Errors for a fragment the kernel refuses.
-pub fn tail_sums(frame: &Frame, k: usize, arith: Arith) -> Result<Vec<TailSums>, String> {
-    let frags = &frame.stream.frags;
-    let mut out = vec![TailSums::default(); frame.stream.pixels()];
+pub fn tail_sums(binned: &BinnedStream, k: usize, arith: Arith) -> Result<Vec<TailSums>, String> {
+    let frags = &binned.stream.frags;
+    let mut out = vec![TailSums::default(); binned.stream.pixels()];
     for (p, sums) in out.iter_mut().enumerate() {
-        for &i in frame.sorted.of(p).iter().skip(k) {
+        for &i in binned.sorted.of(p).iter().skip(k) {
             let fragment = frags[i as usize]
                 .to_kernel()
                 .map_err(|e| format!("fragment {i}: {e}"))?;
@@ -108,9 +108,9 @@ pub struct TailStats {
 pub const TAIL_FIELDS: [&str; 5] = ["R", "G", "B", "alpha", "count"];
 
 /// Tail-sum statistics of a frame with `k` head rows, fragments quantized in `arith`.
-pub fn tail_stats(frame: &Frame, k: usize, arith: Arith) -> Result<TailStats, String> {
-    let sums = tail_sums(frame, k, arith)?;
-    let covered: Vec<usize> = (0..sums.len()).filter(|&p| !frame.bins.of(p).is_empty()).collect();
+pub fn tail_stats(binned: &BinnedStream, k: usize, arith: Arith) -> Result<TailStats, String> {
+    let sums = tail_sums(binned, k, arith)?;
+    let covered: Vec<usize> = (0..sums.len()).filter(|&p| !binned.bins.of(p).is_empty()).collect();
     let get = |t: &TailSums, i: usize| {
         if i < 3 {
             t.color[i]
@@ -132,7 +132,7 @@ pub fn tail_stats(frame: &Frame, k: usize, arith: Arith) -> Result<TailStats, St
         })
         .count();
     Ok(TailStats {
-        depth: depth(frame),
+        depth: depth(binned),
         fields,
         paper_saturated,
     })
@@ -218,9 +218,9 @@ pub fn run_stream(
     stream
         .validate()
         .map_err(|(i, e)| format!("{}: fragment {i}: {e}", scene.name()))?;
-    let frame = Frame::new(stream);
-    let reference = Method::Reference.render(&frame)?;
-    let covered: Vec<bool> = frame.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
+    let binned = BinnedStream::new(stream);
+    let reference = Method::Reference.render(&binned)?;
+    let covered: Vec<bool> = binned.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
     let queue = Mutex::new((0..methods.len()).rev().collect::<Vec<_>>());
     let results = Mutex::new(vec![None; methods.len()]);
     let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
@@ -229,7 +229,7 @@ pub fn run_stream(
             s.spawn(|| {
                 while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
                     let m = methods[i];
-                    let r = measure(&frame, &reference, &covered, m, with_flip);
+                    let r = measure(&binned, &reference, &covered, m, with_flip);
                     if let Ok(mut out) = results.lock() {
                         out[i] = Some(r);
                     }
@@ -248,19 +248,25 @@ pub fn run_stream(
         scene,
         seed,
         fragments: stream.frags.len(),
-        depth: depth(&frame),
+        depth: depth(&binned),
         measures,
     })
 }
 
-fn measure(frame: &Frame, reference: &Image, covered: &[bool], m: Method, with_flip: bool) -> Result<Measure, String> {
+fn measure(
+    binned: &BinnedStream,
+    reference: &Image,
+    covered: &[bool],
+    m: Method,
+    with_flip: bool,
+) -> Result<Measure, String> {
     let (image, saturated) = match m {
-        Method::HybridWith(k, a) => hybrid_with(k, a, frame).map(|(i, s)| (i, Some(s)))?,
-        _ => (m.render(frame)?, None),
+        Method::HybridWith(k, a) => hybrid_with(k, a, binned).map(|(i, s)| (i, Some(s)))?,
+        _ => (m.render(binned)?, None),
     };
     Ok(Measure {
         method: m,
-        bytes: m.bytes_per_pixel(frame),
+        bytes: m.bytes_per_pixel(binned),
         quality: compare(reference, &image, with_flip),
         covered: compare_covered(reference, &image, covered),
         saturated,

@@ -2,7 +2,7 @@
 
 use indicatif::{ProgressBar, ProgressStyle};
 use oit_lab::dump;
-use oit_lab::methods::{Frame, HT_SIZES, MLAB_SIZES, Method};
+use oit_lab::methods::{BinnedStream, HT_SIZES, MLAB_SIZES, Method};
 use oit_lab::metrics::score;
 use oit_lab::picture::{Cell, INSET_ZOOM, Picture, Row, counts_picture, densest, labelled_figure};
 use oit_lab::report::{Evaluation, evaluate, full_table, summary_table, vis_bias_where};
@@ -687,11 +687,11 @@ fn cmd_faint(mut a: Args) -> Result<(), Fail> {
                 stream
                     .validate()
                     .map_err(|(i, e)| runtime(format!("{}: fragment {i}: {e}", sc.name())))?;
-                let frame = Frame::new(&stream);
+                let binned = BinnedStream::new(&stream);
                 rows.push((
                     sc.name().to_string(),
                     seed,
-                    tail_stats(&frame, k, arith).map_err(runtime)?,
+                    tail_stats(&binned, k, arith).map_err(runtime)?,
                 ));
             }
         }
@@ -918,12 +918,12 @@ fn cmd_evaluate(mut a: Args) -> Result<(), Fail> {
         Some(f) => format!("PSNR >= {psnr_target} dB and mean FLIP <= {f} on covered pixels"),
         None => format!("PSNR >= {psnr_target} dB on covered pixels"),
     };
-    let frame = Frame::new(&stream);
+    let binned = BinnedStream::new(&stream);
     // Judged on the covered pixels (where the reference has a fragment): the empty
     // background is right in every method and would lift the PSNR. The whole-image values
     // are printed beside.
     let check = |m: Method| -> Result<(bool, String), Fail> {
-        let img = m.render(&frame).map_err(runtime)?;
+        let img = m.render(&binned).map_err(runtime)?;
         let q = score(&e.reference.image, &img, &e.covered, flip_target.is_some());
         let ok = q.covered.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f));
         let flip = |v: Option<f64>| v.map_or(String::new(), |f| format!(", FLIP {f:.4}"));

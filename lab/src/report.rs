@@ -2,7 +2,7 @@
 //! and the Markdown tables.
 
 use crate::faint::{Depth, depth};
-use crate::methods::{Frame, Image, Method};
+use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{Scorer, Scores, score};
 use crate::stream::Stream;
 use std::time::Instant;
@@ -63,15 +63,15 @@ pub fn evaluate(
     stream
         .validate()
         .map_err(|(i, e)| format!("{name}: fragment {i}: {e}"))?;
-    let frame = Frame::new(stream);
+    let binned = BinnedStream::new(stream);
     let t = Instant::now();
-    let image = Method::Reference.render(&frame)?;
-    let ms = (t.elapsed().as_secs_f64() + frame.sort_seconds) * 1e3;
-    let covered: Vec<bool> = frame.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
+    let image = Method::Reference.render(&binned)?;
+    let ms = (t.elapsed().as_secs_f64() + binned.sort_seconds) * 1e3;
+    let covered: Vec<bool> = binned.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
     let scores = score(&image, &image, &covered, false);
     let reference = Entry {
         method: Method::Reference,
-        bytes: Method::Reference.bytes_per_pixel(&frame),
+        bytes: Method::Reference.bytes_per_pixel(&binned),
         image,
         scores,
         ms,
@@ -82,7 +82,7 @@ pub fn evaluate(
     let mut rendered = Vec::with_capacity(methods.len());
     for &m in methods {
         let t = Instant::now();
-        let image = m.render(&frame)?;
+        let image = m.render(&binned)?;
         let ms = t.elapsed().as_secs_f64() * 1e3;
         rendered.push((m, image, ms));
         tick(&m.name());
@@ -109,7 +109,7 @@ pub fn evaluate(
         let scores = q.ok_or("metrics thread failed")?;
         entries.push(Entry {
             method: m,
-            bytes: m.bytes_per_pixel(&frame),
+            bytes: m.bytes_per_pixel(&binned),
             image,
             scores,
             ms,
@@ -118,9 +118,9 @@ pub fn evaluate(
     Ok(Evaluation {
         name: name.to_string(),
         fragments: stream.frags.len(),
-        max_depth: frame.bins.max_depth_complexity(),
-        counts: frame.bins.start.windows(2).map(|w| w[1] - w[0]).collect(),
-        depth: depth(&frame),
+        max_depth: binned.bins.max_depth_complexity(),
+        counts: binned.bins.start.windows(2).map(|w| w[1] - w[0]).collect(),
+        depth: depth(&binned),
         covered,
         reference,
         entries,

@@ -15,7 +15,7 @@
 //! fragments (no merge happens): both come out with zero change (tests/stability.rs).
 
 use crate::faint::{Depth, depth, spread};
-use crate::methods::{Frame, HT_SIZES, Image, MLAB_SIZES, Method, Weight};
+use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method, Weight};
 use crate::metrics::{Change, Scorer, change, srgb8};
 use crate::scenes::{Primitives, Rng, Scene};
 use std::sync::Mutex;
@@ -194,13 +194,13 @@ pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)
             stream
                 .validate()
                 .map_err(|(i, e)| format!("{} seed {seed} order {o}: fragment {i}: {e}", scene.name()))?;
-            let frame = Frame::new(&stream);
+            let binned = BinnedStream::new(&stream);
             if o == 0 {
-                covered = frame.bins.start.windows(2).map(|x| x[1] > x[0]).collect();
-                depths.push(depth(&frame));
+                covered = binned.bins.start.windows(2).map(|x| x[1] > x[0]).collect();
+                depths.push(depth(&binned));
                 fragments.push(stream.frags.len());
             }
-            let reference = Method::Reference.render(&frame)?;
+            let reference = Method::Reference.render(&binned)?;
             let scorer = Scorer::new(&reference, &covered);
             // Render and score every method, on all cores (the kernel methods are single
             // threaded), then fold the images into the tracks in method order.
@@ -215,7 +215,7 @@ pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)
                             let r = (if m == Method::Reference {
                                 Ok(reference.clone())
                             } else {
-                                m.render(&frame)
+                                m.render(&binned)
                             })
                             .map(|img| {
                                 let q = scorer.score(&img, plan.with_flip);
@@ -244,7 +244,7 @@ pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)
             for (i, r) in results.into_iter().enumerate() {
                 let (img, sample) = r.ok_or("a rendering thread failed")??;
                 runs[i].samples.push(sample);
-                runs[i].bytes = plan.methods[i].bytes_per_pixel(&frame);
+                runs[i].bytes = plan.methods[i].bytes_per_pixel(&binned);
                 images.push(img);
             }
             let changes: Mutex<Vec<Option<Change>>> = Mutex::new(vec![None; images.len()]);

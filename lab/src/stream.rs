@@ -1,7 +1,7 @@
 //! Fragment streams: what a rasterizer emits, in primitive submission order.
 //!
 //! A [`Stream`] is a list of [`Frag`]s for one frame, plus the frame size and the opaque
-//! background color. [`Bins`] groups the fragments per pixel, keeping submission order
+//! background color. [`PixelBins`] groups the fragments per pixel, keeping submission order
 //! inside each pixel (a stable counting sort), which is all that every method needs:
 //! compositing is independent per pixel.
 
@@ -82,19 +82,20 @@ impl Stream {
     }
 }
 
-/// Fragment indices grouped per pixel (CSR): the fragments of pixel `p` are
-/// `index[start[p]..start[p + 1]]`, in submission order (or sorted, see [`Bins::sorted`]).
+/// Fragment indices grouped per pixel (CSR; the tiled renderer's bins of primitives per band
+/// are [`crate::tiled::PrimBins`]): the fragments of pixel `p` are
+/// `index[start[p]..start[p + 1]]`, in submission order (or sorted, see [`PixelBins::sorted`]).
 #[derive(Clone, Debug)]
-pub struct Bins {
+pub struct PixelBins {
     /// `pixels + 1` offsets into `index`.
     pub start: Vec<u32>,
     /// Fragment indices into the stream.
     pub index: Vec<u32>,
 }
 
-impl Bins {
+impl PixelBins {
     /// Group by pixel, keeping submission order inside each pixel.
-    pub fn new(stream: &Stream) -> Bins {
+    pub fn new(stream: &Stream) -> PixelBins {
         let n = stream.pixels();
         let mut start = vec![0u32; n + 1];
         for f in &stream.frags {
@@ -110,12 +111,12 @@ impl Bins {
             index[*slot as usize] = i as u32;
             *slot += 1;
         }
-        Bins { start, index }
+        PixelBins { start, index }
     }
 
     /// The same bins sorted front to back per pixel: by depth, and on equal depth the
     /// later submission first (it goes in front, as with OVER in submission order).
-    pub fn sorted(&self, stream: &Stream) -> Bins {
+    pub fn sorted(&self, stream: &Stream) -> PixelBins {
         let mut index = self.index.clone();
         for p in 0..self.start.len() - 1 {
             let s = &mut index[self.start[p] as usize..self.start[p + 1] as usize];
@@ -127,7 +128,7 @@ impl Bins {
                     .then(b.cmp(&a))
             });
         }
-        Bins {
+        PixelBins {
             start: self.start.clone(),
             index,
         }

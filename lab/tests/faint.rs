@@ -4,7 +4,7 @@
 use mlab::hybrid::PaperTail;
 use mlab::{Arithmetic, Framebuffer, HybridFramebuffer, Paper, Row, Unbiased};
 use oit_lab::faint::{TailSums, depth, quantile, run_stream, spread, tail_sums};
-use oit_lab::methods::{Arith, Frame, Image, Method, hybrid_with};
+use oit_lab::methods::{Arith, BinnedStream, Image, Method, hybrid_with};
 use oit_lab::metrics::{compare, compare_covered};
 use oit_lab::scenes::Scene;
 use oit_lab::stream::{Frag, Stream};
@@ -39,10 +39,10 @@ fn depth_counts_only_covered_pixels() {
             (0, 3.0, [0.1; 3], 0.5),
         ],
     );
-    let d = depth(&Frame::new(&s));
+    let d = depth(&BinnedStream::new(&s));
     assert_eq!((d.covered, d.mean, d.max), (2, 2.0, 3));
     let empty = stream(2, 2, &[]);
-    let d = depth(&Frame::new(&empty));
+    let d = depth(&BinnedStream::new(&empty));
     assert_eq!((d.covered, d.mean, d.max), (0, 0.0, 0));
 }
 
@@ -61,7 +61,7 @@ fn tail_sums_skip_the_nearest_k_and_invisible_rows() {
             (0, 5.0, [0.0, 0.0, 0.1], 0.0), // additive light: counted
         ],
     );
-    let f = Frame::new(&s);
+    let f = BinnedStream::new(&s);
     let all = tail_sums(&f, 0, Arith::Paper).unwrap()[0];
     assert_eq!(
         all,
@@ -110,7 +110,7 @@ fn clamp32(v: u64) -> u32 {
 fn tail_sums_equal_the_kernel_tail_where_it_does_not_saturate() {
     for (sc, w, h) in [(Scene::Splats, 64, 36), (Scene::Fog, 24, 14), (Scene::Hair, 64, 36)] {
         let s = sc.generate(w, h, 3);
-        let f = Frame::new(&s);
+        let f = BinnedStream::new(&s);
         let (mut paper_saturated, mut unbiased_saturated) = (0usize, 0usize);
         let sums = tail_sums(&f, 3, Arith::Paper).unwrap();
         for (p, (t, got)) in sums.iter().zip(kernel_tails::<Paper>(&s)).enumerate() {
@@ -262,7 +262,7 @@ fn saturated_tails_by_hand() {
     }
     frags.push((2, 1.0, [0.0; 3], 1.0));
     let s = stream(3, 1, &frags);
-    let f = Frame::new(&s);
+    let f = BinnedStream::new(&s);
     let (_, saturated) = hybrid_with(0, Arith::Paper, &f).unwrap();
     assert_eq!(saturated, 1);
     // One head row takes one fragment per pixel out of the tail: none saturates.
@@ -300,7 +300,7 @@ fn report_has_every_scene_and_method() {
     assert_eq!(
         methods
             .iter()
-            .map(|m| m.bytes_per_pixel(&Frame::new(&stream(1, 1, &[]))))
+            .map(|m| m.bytes_per_pixel(&BinnedStream::new(&stream(1, 1, &[]))))
             .sum::<f64>(),
         8.0 + 4.0 * 8.0 * (1 + 2 + 4 + 8) as f64
     );

@@ -1,6 +1,6 @@
 //! Every method against a hand-computed case of its own formula, on 1x1 frames.
 
-use oit_lab::methods::{Arith, Frame, Image, Method, Visibility, Weight};
+use oit_lab::methods::{Arith, BinnedStream, Image, Method, Visibility, Weight};
 use oit_lab::stream::{Frag, Stream};
 
 /// A 1x1 stream from `(depth, premultiplied color, alpha)` in submission order.
@@ -23,7 +23,7 @@ fn pixel(frags: &[(f32, [f32; 3], f32)], bg: [f32; 3]) -> Stream {
 }
 
 fn render(m: Method, s: &Stream) -> Image {
-    m.render(&Frame::new(s)).expect("render")
+    m.render(&BinnedStream::new(s)).expect("render")
 }
 
 fn close(got: [f32; 3], want: [f32; 3], tol: f32) {
@@ -356,7 +356,7 @@ fn mlab_transmittance_stalls_in_8_bits() {
 #[test]
 fn every_standard_method_renders_a_small_scene() {
     let s = oit_lab::scenes::Scene::Glass.generate(32, 18, 7);
-    let f = Frame::new(&s);
+    let f = BinnedStream::new(&s);
     for m in Method::standard_list() {
         let img = m.render(&f).unwrap();
         assert_eq!(img.rgb.len(), 32 * 18, "{}", m.name());
@@ -386,7 +386,7 @@ fn lanes_give_the_same_image_as_scalar() {
     for sc in oit_lab::scenes::Scene::ALL {
         // 37 columns: the last span of each row is partial.
         let s = sc.generate(37, 21, 5);
-        let f = Frame::new(&s);
+        let f = BinnedStream::new(&s);
         for a in Arith::ALL {
             for m in [1, 2, 4, 8] {
                 let (x, y) = (mlab_with(m, a, &f).unwrap(), mlab_lanes_with(m, a, &f).unwrap());

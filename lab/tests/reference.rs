@@ -1,8 +1,8 @@
 //! The lab's exact reference is `mlab_reference::oracle::composite` over the A-buffer's
-//! sorted bins (`Frame::sorted`, sorted once and timed as the A-buffer's sort): that order
+//! sorted bins (`BinnedStream::sorted`, sorted once and timed as the A-buffer's sort): that order
 //! must be the oracle's own (`mlab_reference::oracle::order`), for every scene.
 
-use oit_lab::methods::{Frame, Method};
+use oit_lab::methods::{BinnedStream, Method};
 use oit_lab::scenes::Scene;
 use oit_lab::stream::{Frag, Stream};
 
@@ -10,11 +10,11 @@ use oit_lab::stream::{Frag, Stream};
 fn sorted_bins_are_the_oracles_order_and_the_reference_is_the_oracle() {
     for sc in Scene::ALL {
         let s = sc.generate(96, 54, 3);
-        let frame = Frame::new(&s);
-        let img = Method::Reference.render(&frame).expect("reference");
+        let binned = BinnedStream::new(&s);
+        let img = Method::Reference.render(&binned).expect("reference");
         let bg = s.background.map(f64::from);
         for p in 0..s.pixels() {
-            let submitted: Vec<mlab_reference::Layer> = frame
+            let submitted: Vec<mlab_reference::Layer> = binned
                 .bins
                 .of(p)
                 .iter()
@@ -29,9 +29,9 @@ fn sorted_bins_are_the_oracles_order_and_the_reference_is_the_oracle() {
                 .collect();
             let want: Vec<u32> = mlab_reference::oracle::order(&submitted)
                 .into_iter()
-                .map(|k| frame.bins.of(p)[k])
+                .map(|k| binned.bins.of(p)[k])
                 .collect();
-            assert_eq!(frame.sorted.of(p), want.as_slice(), "{} pixel {p}", sc.name());
+            assert_eq!(binned.sorted.of(p), want.as_slice(), "{} pixel {p}", sc.name());
             let (c, t) = mlab_reference::oracle(&submitted, bg);
             assert_eq!(
                 img.rgb[p].map(f32::to_bits),
@@ -64,8 +64,8 @@ fn ties_and_signed_zeros() {
         background: [0.5; 3],
         frags,
     };
-    let frame = Frame::new(&s);
-    assert_eq!(frame.sorted.of(0), &[4, 3, 1, 2, 0]);
+    let binned = BinnedStream::new(&s);
+    assert_eq!(binned.sorted.of(0), &[4, 3, 1, 2, 0]);
     let layers: Vec<mlab_reference::Layer> = s
         .frags
         .iter()

@@ -5,7 +5,7 @@
 
 use mlab::glam::{Vec3, Vec4};
 use mlab::{Arithmetic, Background, Framebuffer, Paper, Row, SpanFramebuffer, Unbiased, to_rgba8};
-use oit_lab::methods::{Frame, Method, Weight};
+use oit_lab::methods::{BinnedStream, Method, Weight};
 use oit_lab::scenes::{Primitives, Scene};
 use oit_lab::stream::Stream;
 use oit_lab::tiled::{TiledMethod, TiledRenderer, replay_mlab4, storage_bytes};
@@ -62,7 +62,7 @@ fn abuffer_sequential(s: &Stream) -> Vec<[u8; 4]> {
 }
 
 fn lab_rgba8(m: Method, s: &Stream) -> Vec<[u8; 4]> {
-    let img = m.render(&Frame::new(s)).unwrap();
+    let img = m.render(&BinnedStream::new(s)).unwrap();
     img.rgb
         .iter()
         .map(|c| to_rgba8(Vec4::new(c[0], c[1], c[2], 1.0)))

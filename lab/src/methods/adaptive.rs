@@ -4,7 +4,7 @@
 // written as in the blend equations.
 #![allow(clippy::needless_range_loop)]
 
-use super::{Frame, Image, f16r, over_bg, per_pixel};
+use super::{BinnedStream, Image, f16r, over_bg, per_pixel};
 
 /// Adaptive Transparency's visibility function: nodes `(z, T)` sorted front to back, where
 /// `T` is the visibility just behind `z` (seed 002: "a sorted (front-to-back) sequence of
@@ -99,18 +99,18 @@ impl Visibility {
 /// `C = sum(c * vis(z))` in f32 registers, written once to an RGBA16F target, plus
 /// `bg * vis(inf)`. The departures from the sample: fragments keep their f32 color and alpha
 /// (the sample reads them back from RGBA8 fragment lists), and `n` may be 1 or 2.
-pub(super) fn adaptive(frame: &Frame, n: usize) -> Image {
-    let (frags, bg) = (&frame.stream.frags, frame.bg());
-    per_pixel(frame, |p| {
+pub(super) fn adaptive(binned: &BinnedStream, n: usize) -> Image {
+    let (frags, bg) = (&binned.stream.frags, binned.bg());
+    per_pixel(binned, |p| {
         let mut v = Visibility {
             nodes: Vec::with_capacity(n + 1),
         };
-        for &i in frame.bins.of(p) {
+        for &i in binned.bins.of(p) {
             let f = &frags[i as usize];
             v.insert(f.depth, f.alpha, n);
         }
         let mut c = [0.0f32; 3];
-        for &i in frame.bins.of(p) {
+        for &i in binned.bins.of(p) {
             let f = &frags[i as usize];
             let vis = v.at(f.depth);
             for k in 0..3 {

@@ -6,7 +6,7 @@
 // written as in the blend equations.
 #![allow(clippy::needless_range_loop)]
 
-use super::{Frame, Image, finite_or_zero, over_bg, per_pixel};
+use super::{BinnedStream, Image, finite_or_zero, over_bg, per_pixel};
 use mlab::half::f16;
 
 /// IEEE half rounding of one stored value (an `RGBA16F` channel after a blend).
@@ -104,11 +104,11 @@ pub const UNDER_THRESHOLD: f32 = 0.01;
 
 /// OVER in submission order: `C = c + C * (1 - a)`, `T = T * (1 - a)`, every result
 /// rounded to half; the target starts as the background with `T = 1`.
-pub(super) fn over(frame: &Frame) -> Image {
-    let (frags, bg) = (&frame.stream.frags, frame.bg());
-    per_pixel(frame, |p| {
+pub(super) fn over(binned: &BinnedStream) -> Image {
+    let (frags, bg) = (&binned.stream.frags, binned.bg());
+    per_pixel(binned, |p| {
         let (mut c, mut t) = (bg.map(f16r), 1.0f32);
-        for &i in frame.bins.of(p) {
+        for &i in binned.bins.of(p) {
             let f = &frags[i as usize];
             over_step(&mut c, &mut t, f.color, f.alpha);
         }
@@ -119,11 +119,11 @@ pub(super) fn over(frame: &Frame) -> Image {
 /// UNDER front to back over the sorted fragments (seed 004): `C = C + T * c`,
 /// `T = T * (1 - a)`, rounded to half; a fragment arriving when `T < UNDER_THRESHOLD` is
 /// discarded. The background is composited last with the remaining `T`.
-pub(super) fn under(frame: &Frame) -> Image {
-    let (frags, bg) = (&frame.stream.frags, frame.bg());
-    per_pixel(frame, |p| {
+pub(super) fn under(binned: &BinnedStream) -> Image {
+    let (frags, bg) = (&binned.stream.frags, binned.bg());
+    per_pixel(binned, |p| {
         let (mut c, mut t) = ([0.0f32; 3], 1.0f32);
-        for &i in frame.sorted.of(p) {
+        for &i in binned.sorted.of(p) {
             if t < UNDER_THRESHOLD {
                 break;
             }
@@ -148,11 +148,11 @@ fn window_depth(z: f32, (near, far): (f32, f32)) -> f32 {
 
 /// WBOIT: `acc += (c * w, a * w)` in half, `r *= 1 - a` in unorm8;
 /// `C = acc.rgb / max(acc.a, 1e-5) * (1 - r) + bg * r`.
-pub(super) fn wboit(frame: &Frame, weight: Weight) -> Image {
-    let (frags, bg, nf) = (&frame.stream.frags, frame.bg(), frame.near_far);
-    per_pixel(frame, |p| {
+pub(super) fn wboit(binned: &BinnedStream, weight: Weight) -> Image {
+    let (frags, bg, nf) = (&binned.stream.frags, binned.bg(), binned.near_far);
+    per_pixel(binned, |p| {
         let (mut acc, mut r) = ([0.0f32; 4], 255u8);
-        for &i in frame.bins.of(p) {
+        for &i in binned.bins.of(p) {
             let f = &frags[i as usize];
             let w = weight.eval(f.color, f.alpha, f.depth, window_depth(f.depth, nf));
             wboit_step(&mut acc, &mut r, f.color, f.alpha, w);
@@ -163,11 +163,11 @@ pub(super) fn wboit(frame: &Frame, weight: Weight) -> Image {
 
 /// Bavoil-Myers (seed 004, as in HT's tail): `n` fragments, `S_c`, `S_a` sums;
 /// `T = (1 - S_a / n)^n`, `C = S_c / S_a * (1 - T) + bg * T` (`S_c + bg` when `S_a = 0`).
-pub(super) fn bavoil_myers(frame: &Frame) -> Image {
-    let (frags, bg) = (&frame.stream.frags, frame.bg());
-    per_pixel(frame, |p| {
+pub(super) fn bavoil_myers(binned: &BinnedStream) -> Image {
+    let (frags, bg) = (&binned.stream.frags, binned.bg());
+    per_pixel(binned, |p| {
         let (mut acc, mut n) = ([0.0f32; 4], 0.0f32);
-        for &i in frame.bins.of(p) {
+        for &i in binned.bins.of(p) {
             let f = &frags[i as usize];
             for k in 0..3 {
                 acc[k] = f16r(acc[k] + f.color[k]);
@@ -191,11 +191,11 @@ pub(super) fn bavoil_myers(frame: &Frame) -> Image {
 /// the final pass in f32. There is no clamp: once `sum(a)` passes 1 the background term goes
 /// negative and the image darkens (seed 003, line 278: "Completely inaccurate with higher
 /// alpha values"); the visibility returned is `1 - sum(a)`, negative then too.
-pub(super) fn meshkin(frame: &Frame) -> Image {
-    let (frags, bg) = (&frame.stream.frags, frame.bg());
-    per_pixel(frame, |p| {
+pub(super) fn meshkin(binned: &BinnedStream) -> Image {
+    let (frags, bg) = (&binned.stream.frags, binned.bg());
+    per_pixel(binned, |p| {
         let mut acc = [0.0f32; 4];
-        for &i in frame.bins.of(p) {
+        for &i in binned.bins.of(p) {
             let f = &frags[i as usize];
             for k in 0..3 {
                 acc[k] = f16r(acc[k] + f.color[k]);

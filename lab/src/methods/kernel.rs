@@ -2,7 +2,7 @@
 //! submission order, and the one place where the lab's [`Arith`] picks the kernel's
 //! arithmetic type (`*_with`).
 
-use super::{Frame, HT_SIZES, Image, MLAB_SIZES};
+use super::{BinnedStream, HT_SIZES, Image, MLAB_SIZES};
 use mlab::glam::Vec3;
 use mlab::{
     Arithmetic, Fragment, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased,
@@ -48,8 +48,11 @@ impl Arith {
     }
 }
 
-fn kernel_image(frame: &Frame, resolve: impl Fn(u32, u32) -> Result<Resolved, String>) -> Result<Image, String> {
-    let s = frame.stream;
+fn kernel_image(
+    binned: &BinnedStream,
+    resolve: impl Fn(u32, u32) -> Result<Resolved, String>,
+) -> Result<Image, String> {
+    let s = binned.stream;
     let bg = Vec3::from(s.background);
     let mut rgb = Vec::with_capacity(s.pixels());
     let mut vis = Vec::with_capacity(s.pixels());
@@ -74,8 +77,8 @@ pub(super) fn err(e: impl std::fmt::Display) -> String {
 
 /// MLAB with the kernel's framebuffer view in arithmetic `A`, in submission order (or, when
 /// `sorted`, each pixel's fragments front to back).
-pub fn run_mlab<const M: usize, A: Arithmetic>(frame: &Frame, sorted: bool) -> Result<Image, String> {
-    let s = frame.stream;
+pub fn run_mlab<const M: usize, A: Arithmetic>(binned: &BinnedStream, sorted: bool) -> Result<Image, String> {
+    let s = binned.stream;
     let mut storage = vec![Row::EMPTY; MlabFramebuffer::<M, A>::rows_needed(s.width, s.height).map_err(err)?];
     let mut fb = MlabFramebuffer::<M, A>::new(&mut storage, s.width, s.height).map_err(err)?;
     fb.clear();
@@ -85,7 +88,7 @@ pub fn run_mlab<const M: usize, A: Arithmetic>(frame: &Frame, sorted: bool) -> R
         fb.insert(f.pixel % s.width, f.pixel / s.width, &frag).map_err(err)
     };
     if sorted {
-        for &i in &frame.sorted.index {
+        for &i in &binned.sorted.index {
             insert(&mut fb, i as usize)?;
         }
     } else {
@@ -93,14 +96,14 @@ pub fn run_mlab<const M: usize, A: Arithmetic>(frame: &Frame, sorted: bool) -> R
             insert(&mut fb, i)?;
         }
     }
-    kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))
+    kernel_image(binned, |x, y| fb.resolve(x, y).map_err(err))
 }
 
 /// Hybrid Transparency with the kernel's framebuffer view in arithmetic `A` (which picks the
 /// tail), in submission order; also the number of pixels whose tail has a field at its
 /// maximum (`saturated`).
-pub fn run_hybrid<const K: usize, A: Arithmetic>(frame: &Frame) -> Result<(Image, usize), String> {
-    let s = frame.stream;
+pub fn run_hybrid<const K: usize, A: Arithmetic>(binned: &BinnedStream) -> Result<(Image, usize), String> {
+    let s = binned.stream;
     let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K, A>::rows_needed(s.width, s.height).map_err(err)?];
     let mut fb = HybridFramebuffer::<K, A>::new(&mut storage, s.width, s.height).map_err(err)?;
     // The tail slot of `Row::EMPTY` bytes is not an empty tail: clear for a new frame.
@@ -115,37 +118,37 @@ pub fn run_hybrid<const K: usize, A: Arithmetic>(frame: &Frame) -> Result<(Image
             saturated += usize::from(fb.pixel(x, y).map_err(err)?.1.saturated());
         }
     }
-    Ok((kernel_image(frame, |x, y| fb.resolve(x, y).map_err(err))?, saturated))
+    Ok((kernel_image(binned, |x, y| fb.resolve(x, y).map_err(err))?, saturated))
 }
 
-fn mlab_dyn<A: Arithmetic>(m: usize, frame: &Frame, sorted: bool) -> Result<Image, String> {
+fn mlab_dyn<A: Arithmetic>(m: usize, binned: &BinnedStream, sorted: bool) -> Result<Image, String> {
     match m {
-        1 => run_mlab::<1, A>(frame, sorted),
-        2 => run_mlab::<2, A>(frame, sorted),
-        3 => run_mlab::<3, A>(frame, sorted),
-        4 => run_mlab::<4, A>(frame, sorted),
-        5 => run_mlab::<5, A>(frame, sorted),
-        6 => run_mlab::<6, A>(frame, sorted),
-        7 => run_mlab::<7, A>(frame, sorted),
-        8 => run_mlab::<8, A>(frame, sorted),
-        12 => run_mlab::<12, A>(frame, sorted),
-        16 => run_mlab::<16, A>(frame, sorted),
+        1 => run_mlab::<1, A>(binned, sorted),
+        2 => run_mlab::<2, A>(binned, sorted),
+        3 => run_mlab::<3, A>(binned, sorted),
+        4 => run_mlab::<4, A>(binned, sorted),
+        5 => run_mlab::<5, A>(binned, sorted),
+        6 => run_mlab::<6, A>(binned, sorted),
+        7 => run_mlab::<7, A>(binned, sorted),
+        8 => run_mlab::<8, A>(binned, sorted),
+        12 => run_mlab::<12, A>(binned, sorted),
+        16 => run_mlab::<16, A>(binned, sorted),
         _ => Err(format!("MLAB {m}: supported row counts are {MLAB_SIZES:?}")),
     }
 }
 
-fn hybrid_dyn<A: Arithmetic>(k: usize, frame: &Frame) -> Result<(Image, usize), String> {
+fn hybrid_dyn<A: Arithmetic>(k: usize, binned: &BinnedStream) -> Result<(Image, usize), String> {
     match k {
-        0 => run_hybrid::<0, A>(frame),
-        1 => run_hybrid::<1, A>(frame),
-        2 => run_hybrid::<2, A>(frame),
-        3 => run_hybrid::<3, A>(frame),
-        4 => run_hybrid::<4, A>(frame),
-        5 => run_hybrid::<5, A>(frame),
-        6 => run_hybrid::<6, A>(frame),
-        7 => run_hybrid::<7, A>(frame),
-        11 => run_hybrid::<11, A>(frame),
-        15 => run_hybrid::<15, A>(frame),
+        0 => run_hybrid::<0, A>(binned),
+        1 => run_hybrid::<1, A>(binned),
+        2 => run_hybrid::<2, A>(binned),
+        3 => run_hybrid::<3, A>(binned),
+        4 => run_hybrid::<4, A>(binned),
+        5 => run_hybrid::<5, A>(binned),
+        6 => run_hybrid::<6, A>(binned),
+        7 => run_hybrid::<7, A>(binned),
+        11 => run_hybrid::<11, A>(binned),
+        15 => run_hybrid::<15, A>(binned),
         _ => Err(format!("HT {k}: supported head sizes are {HT_SIZES:?}")),
     }
 }
@@ -153,26 +156,26 @@ fn hybrid_dyn<A: Arithmetic>(k: usize, frame: &Frame) -> Result<(Image, usize), 
 // The one place where the lab's `Arith` picks the kernel's arithmetic type.
 
 /// MLAB `m` with arithmetic `arith` (scalar kernel), in submission order.
-pub fn mlab_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+pub fn mlab_with(m: usize, arith: Arith, binned: &BinnedStream) -> Result<Image, String> {
     match arith {
-        Arith::Paper => mlab_dyn::<Paper>(m, frame, false),
-        Arith::Unbiased => mlab_dyn::<Unbiased>(m, frame, false),
+        Arith::Paper => mlab_dyn::<Paper>(m, binned, false),
+        Arith::Unbiased => mlab_dyn::<Unbiased>(m, binned, false),
     }
 }
 
 /// MLAB `m` with arithmetic `arith`, fed each pixel's fragments front to back.
-pub fn mlab_sorted_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+pub fn mlab_sorted_with(m: usize, arith: Arith, binned: &BinnedStream) -> Result<Image, String> {
     match arith {
-        Arith::Paper => mlab_dyn::<Paper>(m, frame, true),
-        Arith::Unbiased => mlab_dyn::<Unbiased>(m, frame, true),
+        Arith::Paper => mlab_dyn::<Paper>(m, binned, true),
+        Arith::Unbiased => mlab_dyn::<Unbiased>(m, binned, true),
     }
 }
 
 /// HT `k` with arithmetic `arith` (scalar kernel): the image and the number of pixels with a
 /// saturated tail.
-pub fn hybrid_with(k: usize, arith: Arith, frame: &Frame) -> Result<(Image, usize), String> {
+pub fn hybrid_with(k: usize, arith: Arith, binned: &BinnedStream) -> Result<(Image, usize), String> {
     match arith {
-        Arith::Paper => hybrid_dyn::<Paper>(k, frame),
-        Arith::Unbiased => hybrid_dyn::<Unbiased>(k, frame),
+        Arith::Paper => hybrid_dyn::<Paper>(k, binned),
+        Arith::Unbiased => hybrid_dyn::<Unbiased>(k, binned),
     }
 }

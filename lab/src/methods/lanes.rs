@@ -1,7 +1,7 @@
 //! MLAB and HT through the kernel's 8-pixel lanes: the same images as [`super::kernel`], bit
 //! for bit.
 
-use super::{Arith, Frame, Image};
+use super::{Arith, BinnedStream, Image};
 use mlab::glam::Vec3;
 use mlab::lanes::{self, HybridSpan, LANES, ResolvedLanes};
 use mlab::{Arithmetic, Fragment, Paper, Row, Unbiased};
@@ -11,13 +11,13 @@ use mlab::{Arithmetic, Fragment, Paper, Row, Unbiased};
 /// with one call (a rasterizer's span of a primitive), which keeps each pixel's submission
 /// order. Fragments are quantized with `quantize` (the arithmetic's).
 fn run_lanes<S: Clone>(
-    frame: &Frame,
+    binned: &BinnedStream,
     empty: S,
     quantize: fn(&Fragment) -> Row,
     insert: fn(&mut S, &[Row; LANES], u8),
     resolve: fn(&S) -> ResolvedLanes,
 ) -> Result<Image, String> {
-    let s = frame.stream;
+    let s = binned.stream;
     let spans_x = (s.width as usize).div_ceil(LANES);
     let mut spans = vec![empty; spans_x * s.height as usize];
     let (mut cur, mut rows, mut mask) = (0usize, [Row::EMPTY; LANES], 0u8);
@@ -57,32 +57,32 @@ fn run_lanes<S: Clone>(
     })
 }
 
-fn mlab_lanes<A: Arithmetic>(m: usize, frame: &Frame) -> Result<Image, String> {
+fn mlab_lanes<A: Arithmetic>(m: usize, binned: &BinnedStream) -> Result<Image, String> {
     let q: fn(&Fragment) -> Row = A::quantize;
     match m {
         1 => run_lanes(
-            frame,
+            binned,
             [[Row::EMPTY; LANES]; 1],
             q,
             lanes::mlab_insert_with::<A, 1>,
             lanes::mlab_resolve::<1>,
         ),
         2 => run_lanes(
-            frame,
+            binned,
             [[Row::EMPTY; LANES]; 2],
             q,
             lanes::mlab_insert_with::<A, 2>,
             lanes::mlab_resolve::<2>,
         ),
         4 => run_lanes(
-            frame,
+            binned,
             [[Row::EMPTY; LANES]; 4],
             q,
             lanes::mlab_insert_with::<A, 4>,
             lanes::mlab_resolve::<4>,
         ),
         8 => run_lanes(
-            frame,
+            binned,
             [[Row::EMPTY; LANES]; 8],
             q,
             lanes::mlab_insert_with::<A, 8>,
@@ -92,32 +92,32 @@ fn mlab_lanes<A: Arithmetic>(m: usize, frame: &Frame) -> Result<Image, String> {
     }
 }
 
-fn hybrid_lanes<A: Arithmetic>(k: usize, frame: &Frame) -> Result<Image, String> {
+fn hybrid_lanes<A: Arithmetic>(k: usize, binned: &BinnedStream) -> Result<Image, String> {
     let q: fn(&Fragment) -> Row = A::quantize;
     match k {
         0 => run_lanes(
-            frame,
+            binned,
             HybridSpan::<0, A>::new(),
             q,
             lanes::hybrid_insert::<0, A>,
             lanes::hybrid_resolve::<0, A>,
         ),
         1 => run_lanes(
-            frame,
+            binned,
             HybridSpan::<1, A>::new(),
             q,
             lanes::hybrid_insert::<1, A>,
             lanes::hybrid_resolve::<1, A>,
         ),
         3 => run_lanes(
-            frame,
+            binned,
             HybridSpan::<3, A>::new(),
             q,
             lanes::hybrid_insert::<3, A>,
             lanes::hybrid_resolve::<3, A>,
         ),
         7 => run_lanes(
-            frame,
+            binned,
             HybridSpan::<7, A>::new(),
             q,
             lanes::hybrid_insert::<7, A>,
@@ -128,17 +128,17 @@ fn hybrid_lanes<A: Arithmetic>(k: usize, frame: &Frame) -> Result<Image, String>
 }
 
 /// MLAB `m` (1, 2, 4 or 8) with arithmetic `arith` through the kernel's 8-pixel lanes.
-pub fn mlab_lanes_with(m: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+pub fn mlab_lanes_with(m: usize, arith: Arith, binned: &BinnedStream) -> Result<Image, String> {
     match arith {
-        Arith::Paper => mlab_lanes::<Paper>(m, frame),
-        Arith::Unbiased => mlab_lanes::<Unbiased>(m, frame),
+        Arith::Paper => mlab_lanes::<Paper>(m, binned),
+        Arith::Unbiased => mlab_lanes::<Unbiased>(m, binned),
     }
 }
 
 /// HT `k` (0, 1, 3 or 7) with arithmetic `arith` through the kernel's 8-pixel lanes.
-pub fn hybrid_lanes_with(k: usize, arith: Arith, frame: &Frame) -> Result<Image, String> {
+pub fn hybrid_lanes_with(k: usize, arith: Arith, binned: &BinnedStream) -> Result<Image, String> {
     match arith {
-        Arith::Paper => hybrid_lanes::<Paper>(k, frame),
-        Arith::Unbiased => hybrid_lanes::<Unbiased>(k, frame),
+        Arith::Paper => hybrid_lanes::<Paper>(k, binned),
+        Arith::Unbiased => hybrid_lanes::<Unbiased>(k, binned),
     }
 }

@@ -1,8 +1,8 @@
 //! The compositing methods, each a function from a frame's fragment stream to an image.
 //!
-//! Every method sees the same [`Frame`]: the stream in submission order, the fragments
-//! grouped per pixel in submission order ([`Frame::bins`]) and sorted front to back
-//! ([`Frame::sorted`], what an application that sorts would submit). Render targets are
+//! Every method sees the same [`BinnedStream`]: the stream in submission order, the fragments
+//! grouped per pixel in submission order ([`BinnedStream::bins`]) and sorted front to back
+//! ([`BinnedStream::sorted`], what an application that sorts would submit). Render targets are
 //! emulated at their storage precision: `RGBA16F` rounds every blend result to IEEE half
 //! ([`f16r`]), `R8` rounds to the nearest of 256 levels after every blend ([`r8_blend`]).
 //!
@@ -29,7 +29,7 @@ pub use baselines::{UNDER_THRESHOLD, Weight, f16r, over_step, r8_blend, wboit_re
 pub use kernel::{Arith, hybrid_with, mlab_sorted_with, mlab_with, run_hybrid, run_mlab};
 pub use lanes::{hybrid_lanes_with, mlab_lanes_with};
 
-use crate::stream::{Bins, Stream};
+use crate::stream::{PixelBins, Stream};
 use adaptive::adaptive;
 use baselines::{bavoil_myers, meshkin, over, under, wboit};
 use reference::reference;
@@ -49,14 +49,16 @@ pub struct Image {
     pub vis: Vec<f32>,
 }
 
-/// A stream prepared for compositing.
-pub struct Frame<'a> {
+/// A stream prepared for compositing: its fragments grouped per pixel ([`PixelBins`]), in
+/// submission order and front to back. (Not a frame of the tiled renderer, [`crate::tiled`],
+/// which stores no fragments.)
+pub struct BinnedStream<'a> {
     /// The stream.
     pub stream: &'a Stream,
     /// Fragment indices per pixel, in submission order.
-    pub bins: Bins,
+    pub bins: PixelBins,
     /// Fragment indices per pixel, front to back (later submission first on equal depth).
-    pub sorted: Bins,
+    pub sorted: PixelBins,
     /// Seconds spent sorting (part of the A-buffer's cost).
     pub sort_seconds: f64,
     /// Near and far depth for the window-space depth of WBOIT's Eq. 10: the stream's
@@ -64,11 +66,11 @@ pub struct Frame<'a> {
     pub near_far: (f32, f32),
 }
 
-impl<'a> Frame<'a> {
+impl<'a> BinnedStream<'a> {
     /// Group and sort the stream. The stream must be valid ([`Stream::validate`]);
     /// otherwise rendering with the kernel methods returns an error.
-    pub fn new(stream: &'a Stream) -> Frame<'a> {
-        let bins = Bins::new(stream);
+    pub fn new(stream: &'a Stream) -> BinnedStream<'a> {
+        let bins = PixelBins::new(stream);
         let t = std::time::Instant::now();
         let sorted = bins.sorted(stream);
         let sort_seconds = t.elapsed().as_secs_f64();
@@ -82,7 +84,7 @@ impl<'a> Frame<'a> {
         } else {
             (0.0, 1.0)
         };
-        Frame {
+        BinnedStream {
             stream,
             bins,
             sorted,
@@ -192,9 +194,9 @@ impl Method {
 
     /// Memory per pixel in bytes. For the A-buffer: 12 bytes per stored fragment (RGBA8,
     /// f32 depth, 32-bit next pointer) plus a 4-byte head pointer, averaged over the frame.
-    pub fn bytes_per_pixel(self, frame: &Frame) -> f64 {
+    pub fn bytes_per_pixel(self, binned: &BinnedStream) -> f64 {
         match self {
-            Method::Reference => 4.0 + 12.0 * frame.stream.frags.len() as f64 / frame.stream.pixels().max(1) as f64,
+            Method::Reference => 4.0 + 12.0 * binned.stream.frags.len() as f64 / binned.stream.pixels().max(1) as f64,
             Method::Mlab(m) | Method::MlabSorted(m) | Method::MlabLanes(m) | Method::MlabWith(m, _) => 8.0 * m as f64,
             Method::Hybrid(k) | Method::HybridLanes(k) | Method::HybridWith(k, _) => 8.0 * (k + 1) as f64,
             Method::Over | Method::Under | Method::Meshkin => 8.0,
@@ -205,33 +207,33 @@ impl Method {
     }
 
     /// Render the frame. Errors only for a stream the kernel refuses or an unsupported size.
-    pub fn render(self, frame: &Frame) -> Result<Image, String> {
+    pub fn render(self, binned: &BinnedStream) -> Result<Image, String> {
         match self {
-            Method::Reference => Ok(reference(frame)),
-            Method::Mlab(m) => mlab_with(m, Arith::DEFAULT, frame),
-            Method::MlabSorted(m) => mlab_sorted_with(m, Arith::DEFAULT, frame),
-            Method::MlabLanes(m) => mlab_lanes_with(m, Arith::DEFAULT, frame),
-            Method::HybridLanes(k) => hybrid_lanes_with(k, Arith::DEFAULT, frame),
-            Method::Hybrid(k) => hybrid_with(k, Arith::DEFAULT, frame).map(|(image, _)| image),
-            Method::MlabWith(m, a) => mlab_with(m, a, frame),
-            Method::HybridWith(k, a) => hybrid_with(k, a, frame).map(|(image, _)| image),
-            Method::Over => Ok(over(frame)),
-            Method::Under => Ok(under(frame)),
-            Method::Wboit(w) => Ok(wboit(frame, w)),
-            Method::BavoilMyers => Ok(bavoil_myers(frame)),
-            Method::Meshkin => Ok(meshkin(frame)),
+            Method::Reference => Ok(reference(binned)),
+            Method::Mlab(m) => mlab_with(m, Arith::DEFAULT, binned),
+            Method::MlabSorted(m) => mlab_sorted_with(m, Arith::DEFAULT, binned),
+            Method::MlabLanes(m) => mlab_lanes_with(m, Arith::DEFAULT, binned),
+            Method::HybridLanes(k) => hybrid_lanes_with(k, Arith::DEFAULT, binned),
+            Method::Hybrid(k) => hybrid_with(k, Arith::DEFAULT, binned).map(|(image, _)| image),
+            Method::MlabWith(m, a) => mlab_with(m, a, binned),
+            Method::HybridWith(k, a) => hybrid_with(k, a, binned).map(|(image, _)| image),
+            Method::Over => Ok(over(binned)),
+            Method::Under => Ok(under(binned)),
+            Method::Wboit(w) => Ok(wboit(binned, w)),
+            Method::BavoilMyers => Ok(bavoil_myers(binned)),
+            Method::Meshkin => Ok(meshkin(binned)),
             Method::Adaptive(0) => Err("AT needs at least one node".into()),
-            Method::Adaptive(n) => Ok(adaptive(frame, n)),
+            Method::Adaptive(n) => Ok(adaptive(binned, n)),
         }
     }
 }
 
 /// Run `f` for every pixel, on all cores, and collect the image.
-fn per_pixel<F>(frame: &Frame, f: F) -> Image
+fn per_pixel<F>(binned: &BinnedStream, f: F) -> Image
 where
     F: Fn(usize) -> ([f32; 3], f32) + Sync,
 {
-    let s = frame.stream;
+    let s = binned.stream;
     let n = s.pixels();
     let mut rgb = vec![[0.0f32; 3]; n];
     let mut vis = vec![0.0f32; n];

@@ -1,17 +1,17 @@
 //! The exact A-buffer reference.
 
-use super::{Frame, Image, per_pixel};
+use super::{BinnedStream, Image, per_pixel};
 use mlab_reference::Layer;
 
 /// The exact reference: `mlab_reference::oracle::composite`, the oracle the kernel's tests
 /// and fuzz targets use, over each pixel's fragments as the A-buffer sorted them
-/// ([`Frame::sorted`]: front to back, later submission first on equal depth, the oracle's
+/// ([`BinnedStream::sorted`]: front to back, later submission first on equal depth, the oracle's
 /// order; the sort is timed apart as `sort_seconds`): in f64 `C += T * c`, `T *= 1 - a`,
 /// then `C + T * bg`.
-pub(super) fn reference(frame: &Frame) -> Image {
-    let (frags, bg) = (&frame.stream.frags, frame.bg().map(f64::from));
-    per_pixel(frame, |p| {
-        let layers = frame.sorted.of(p).iter().map(|&i| {
+pub(super) fn reference(binned: &BinnedStream) -> Image {
+    let (frags, bg) = (&binned.stream.frags, binned.bg().map(f64::from));
+    per_pixel(binned, |p| {
+        let layers = binned.sorted.of(p).iter().map(|&i| {
             let f = &frags[i as usize];
             Layer {
                 color: f.color,

@@ -2,7 +2,7 @@
 //! image a display would clip (`oit-lab scenes`, docs/quality.md "Scene depth").
 
 use super::Scene;
-use crate::methods::{Frame, Method};
+use crate::methods::{BinnedStream, Method};
 use crate::stream::Stream;
 
 /// Fragment counts of one stream.
@@ -46,11 +46,11 @@ pub fn depth(stream: &Stream) -> Depth {
 /// Share of the covered pixels whose exact (A-buffer) color exceeds 1 in some channel: what
 /// a display clips and the metrics clamp (`metrics`), hiding any error there.
 pub fn clipped(stream: &Stream) -> Result<f64, String> {
-    let frame = Frame::new(stream);
-    let img = Method::Reference.render(&frame)?;
+    let binned = BinnedStream::new(stream);
+    let img = Method::Reference.render(&binned)?;
     let (mut covered, mut over) = (0usize, 0usize);
     for (p, rgb) in img.rgb.iter().enumerate() {
-        if frame.bins.of(p).is_empty() {
+        if binned.bins.of(p).is_empty() {
             continue;
         }
         covered += 1;
