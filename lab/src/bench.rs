@@ -226,8 +226,11 @@ impl Measure {
         self.timing.cpu * 1e9 / self.fragments.max(1) as f64
     }
 
-    /// Framebuffer or target + output + primitive bins + primitives: what the frame path
-    /// needs (bytes).
+    /// Framebuffer or target + output + primitive bins + primitives, as allocated (the
+    /// capacities of [`TiledRenderer::held_bytes`] and [`Primitives::bytes`](crate::scenes::Primitives::bytes)):
+    /// what the frame path holds, the figure the measured peak resident memory
+    /// ([`peak_rss`]) is compared with. The method's storage by formula is
+    /// [`storage_bytes`] ([`Method::storage`](crate::methods::Method::storage)).
     pub fn accounted(&self) -> u64 {
         self.held + 4 * self.pixels as u64 + self.prims
     }

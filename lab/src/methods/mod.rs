@@ -98,6 +98,23 @@ impl<'a> BinnedStream<'a> {
     }
 }
 
+/// Bytes a method stores for a frame ([`Method::storage`]): so much per pixel and so much
+/// per fragment (only the A-buffer's grows with the fragments).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Storage {
+    /// Bytes per pixel.
+    pub per_pixel: usize,
+    /// Bytes per fragment.
+    pub per_fragment: usize,
+}
+
+impl Storage {
+    /// Bytes for `pixels` pixels and `fragments` fragments.
+    pub fn bytes(self, pixels: usize, fragments: usize) -> usize {
+        self.per_pixel * pixels + self.per_fragment * fragments
+    }
+}
+
 /// MLAB row counts the lab can run (const generics are instantiated for these).
 pub const MLAB_SIZES: [usize; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 12, 16];
 /// HT head sizes the lab can run.
@@ -192,18 +209,37 @@ impl Method {
             .replace("__", "_")
     }
 
-    /// Memory per pixel in bytes. For the A-buffer: 12 bytes per stored fragment (RGBA8,
-    /// f32 depth, 32-bit next pointer) plus a 4-byte head pointer, averaged over the frame.
-    pub fn bytes_per_pixel(self, binned: &BinnedStream) -> f64 {
+    /// What the method stores for a frame: the one memory accounting of the lab, used by the
+    /// quality tables ([`bytes_per_pixel`](Self::bytes_per_pixel)) and by the tiled frame
+    /// renderer's storage table (`tiled::storage_bytes`). A row of MLAB or HT is 8 bytes;
+    /// `RGBA16F` 8, `R8` 1, `R32F` 4; an AT node 8 (f32 depth and visibility). The A-buffer
+    /// as the paper's Table 1 counts it: 12 bytes per stored fragment (RGBA8, f32 depth,
+    /// 32-bit next pointer) and a 4-byte head pointer per pixel.
+    pub fn storage(self) -> Storage {
+        let per_pixel = |per_pixel| Storage {
+            per_pixel,
+            per_fragment: 0,
+        };
         match self {
-            Method::Reference => 4.0 + 12.0 * binned.stream.frags.len() as f64 / binned.stream.pixels().max(1) as f64,
-            Method::Mlab(m) | Method::MlabSorted(m) | Method::MlabLanes(m) | Method::MlabWith(m, _) => 8.0 * m as f64,
-            Method::Hybrid(k) | Method::HybridLanes(k) | Method::HybridWith(k, _) => 8.0 * (k + 1) as f64,
-            Method::Over | Method::Under | Method::Meshkin => 8.0,
-            Method::Wboit(_) => 9.0,
-            Method::BavoilMyers => 12.0,
-            Method::Adaptive(n) => 8.0 * n as f64 + 8.0,
+            Method::Reference => Storage {
+                per_pixel: 4,
+                per_fragment: 12,
+            },
+            Method::Mlab(m) | Method::MlabSorted(m) | Method::MlabLanes(m) | Method::MlabWith(m, _) => per_pixel(8 * m),
+            Method::Hybrid(k) | Method::HybridLanes(k) | Method::HybridWith(k, _) => per_pixel(8 * (k + 1)),
+            Method::Over | Method::Under | Method::Meshkin => per_pixel(8),
+            Method::Wboit(_) => per_pixel(9),
+            Method::BavoilMyers => per_pixel(12),
+            Method::Adaptive(n) => per_pixel(8 * n + 8),
         }
+    }
+
+    /// Memory per pixel in bytes on this stream ([`storage`](Self::storage); the A-buffer's
+    /// fragments averaged over the frame).
+    pub fn bytes_per_pixel(self, binned: &BinnedStream) -> f64 {
+        let s = self.storage();
+        let frags = binned.stream.frags.len() as f64;
+        s.per_pixel as f64 + s.per_fragment as f64 * frags / binned.stream.pixels().max(1) as f64
     }
 
     /// Render the frame. Errors only for a stream the kernel refuses or an unsupported size.

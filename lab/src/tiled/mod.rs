@@ -23,7 +23,7 @@ mod bins;
 
 pub use bins::PrimBins;
 
-use crate::methods::{Weight, over_step, wboit_resolve, wboit_step};
+use crate::methods::{Arith, Method, Weight, over_step, wboit_resolve, wboit_step};
 use crate::scenes::{Clip, Primitives, SpanLanes};
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
@@ -88,19 +88,20 @@ impl TiledMethod {
     }
 }
 
-/// The one memory accounting of the lab's frame paths: bytes of a method's per-frame
-/// target for `pixels` pixels, `fragments` fragments (the A-buffer as the paper's Table 1
-/// counts it: 12 B per fragment + a 4 B head per pixel; the tiled A-buffer holds only a
-/// band's fragments at a time, see [`TiledRenderer::abuffer_peak_fragments`]), and the
-/// RGBA8 output.
+/// Bytes of a method's per-frame target for `pixels` pixels, `fragments` fragments, and the
+/// RGBA8 output: the lab's one memory accounting, [`Method::storage`], of the same method (the
+/// A-buffer as the paper's Table 1 counts it: 12 B per fragment + a 4 B head per pixel; the
+/// tiled A-buffer holds only a band's fragments at a time, see
+/// [`TiledRenderer::abuffer_peak_fragments`]).
 pub fn storage_bytes(method: TiledMethod, pixels: usize, fragments: usize) -> usize {
-    let target = match method {
-        TiledMethod::Mlab4 | TiledMethod::Mlab4Paper => 4 * std::mem::size_of::<Row>() * pixels,
-        TiledMethod::ABuffer => 4 * pixels + 12 * fragments,
-        TiledMethod::Wboit => 9 * pixels,
-        TiledMethod::Over => 8 * pixels,
+    let same = match method {
+        TiledMethod::Mlab4 => Method::Mlab(4),
+        TiledMethod::Mlab4Paper => Method::MlabWith(4, Arith::Paper),
+        TiledMethod::ABuffer => Method::Reference,
+        TiledMethod::Wboit => Method::Wboit(Weight::Eq7),
+        TiledMethod::Over => Method::Over,
     };
-    target + 4 * pixels
+    same.storage().bytes(pixels, fragments) + 4 * pixels
 }
 
 /// The tiled renderer: primitive bins and each method's target, kept between frames. Work
