@@ -9,6 +9,7 @@
 
 use crate::scenes::Scene;
 use crate::tiled::{PrimBins, TiledMethod, TiledRenderer, raster_only, replay_mlab4, storage_bytes};
+use std::path::Path;
 use std::time::Instant;
 
 /// What to measure.
@@ -677,4 +678,71 @@ pub fn scaling_svg(results: &[Measure], title: &str) -> String {
         top + 12.0 + 16.0 * series.len() as f64 + 4.0
     );
     svg
+}
+
+/// `oit-lab bench`: every scene of `scenes` with every method and thread count of `plan`
+/// (and MLAB 4 at the band heights `bands`), each configuration in a child process of this
+/// program ([`measure_in_child`]); prints the tables and writes the scaling plot to `svg`.
+pub fn command(plan: &Plan, scenes: &[Scene], bands: &[u32], svg: Option<&Path>) -> Result<(), String> {
+    let Plan {
+        warmup,
+        reps,
+        ref threads,
+        band_lines,
+        size,
+        seed,
+    } = *plan;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
+    println!(
+        "# oit-lab bench: {}x{}, seed {seed}, bands of {band_lines} lines, {warmup} warm-up + {reps} timed frames, \
+         threads {threads:?} ({cores} cores available), lanes backend {}, one child process per configuration\n",
+        size.0,
+        size.1,
+        mlab::lanes::BACKEND
+    );
+    let all = run(&exe, scenes, plan, bands, |m| {
+        eprintln!(
+            "  {} {} {} threads, {} lines: {:.2} ms ({:.2} ns/fragment, spread {:.0}%, peak RSS {:.1} MiB)",
+            m.scene.name(),
+            m.what.name(),
+            m.threads,
+            m.band_lines,
+            m.timing.median * 1e3,
+            m.ns_per_fragment(),
+            m.timing.spread_percent(),
+            m.peak_rss as f64 / 1048576.0
+        )
+    })?;
+    let (main_runs, band_runs): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|m| m.band_lines == band_lines);
+    println!("{}", tables(&main_runs));
+    if !band_runs.is_empty() {
+        let mut b: Vec<_> = band_runs;
+        b.extend(
+            main_runs
+                .iter()
+                .filter(|m| m.what == What::Frame(TiledMethod::Mlab4))
+                .cloned(),
+        );
+        println!("## MLAB 4 against band height\n\n{}", band_table(&b));
+    }
+    if let Some(path) = svg {
+        let title = format!("Tiled frames, {}x{}, {} cores", size.0, size.1, cores);
+        let frames: Vec<_> = main_runs
+            .into_iter()
+            .filter(|m| matches!(m.what, What::Frame(_)))
+            .collect();
+        std::fs::write(path, scaling_svg(&frames, &title))
+            .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+        println!("\nScaling plot: {}", path.display());
+    }
+    Ok(())
+}
+
+/// `oit-lab bench --one`: measure one configuration in this process ([`measure`]) and print
+/// its line for the parent.
+pub fn child_command(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<(), String> {
+    let m = measure(scene, what, threads.max(1), plan)?;
+    println!("{}", m.to_line());
+    Ok(())
 }

@@ -15,6 +15,7 @@
 //! The file ends right after the last fragment. Every value is checked on reading: a bad
 //! file gives a [`DumpError`] naming what and where, never a panic.
 
+use crate::scenes::Scene;
 use crate::stream::{Frag, Stream};
 use mlab::FragmentError;
 
@@ -187,4 +188,18 @@ pub fn read(path: &std::path::Path) -> Result<Stream, DumpError> {
 /// Write a dump file.
 pub fn write(path: &std::path::Path, s: &Stream) -> Result<(), DumpError> {
     std::fs::write(path, to_bytes(s)).map_err(|e| DumpError::Io(format!("{}: {e}", path.display())))
+}
+
+/// `oit-lab dump`: write `scene`'s fragment stream (`size`, `seed`) to `output`, and say so.
+pub fn command(scene: Scene, size: (u32, u32), seed: u64, output: &str) -> Result<(), String> {
+    let s = scene.generate(size.0, size.1, seed);
+    write(std::path::Path::new(output), &s).map_err(|e| e.to_string())?;
+    println!(
+        "{}: {} fragments, {}x{}, written to {output}",
+        scene.name(),
+        s.frags.len(),
+        size.0,
+        size.1
+    );
+    Ok(())
 }

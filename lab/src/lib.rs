@@ -10,8 +10,10 @@
 //!   whole image and over the covered pixels.
 //! - [`faint`]: `oit-lab faint` (issue 9): many faint or dense layers, both kernel
 //!   arithmetics, HT tail sums and saturation.
-//! - [`picture`]: PNGs and the Figure 3 grid; [`dump`]: the fragment dump format.
-//! - [`report`]: the whole evaluation of one stream.
+//! - [`picture`]: PNGs and the Figure 3 grid; [`figure`]: what the main job's figures show;
+//!   [`dump`]: the fragment dump format and `oit-lab dump`.
+//! - [`report`]: the whole evaluation of one stream, its tables, the main job (`oit-lab run`)
+//!   and `oit-lab evaluate`.
 //! - [`stability`]: `oit-lab stability`, every scene in several primitive orders and seeds:
 //!   spreads of the quality and the change between orders.
 //! - [`font`]: the 5x7 bitmap font of the figures' labels.
@@ -24,6 +26,7 @@
 pub mod bench;
 pub mod dump;
 pub mod faint;
+pub mod figure;
 pub mod font;
 pub mod methods;
 pub mod metrics;

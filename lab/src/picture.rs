@@ -3,6 +3,11 @@
 use crate::methods::Image;
 use std::path::Path;
 
+/// Create a folder and its parents.
+pub fn create_dir(p: &Path) -> Result<(), String> {
+    std::fs::create_dir_all(p).map_err(|e| format!("cannot create {}: {e}", p.display()))
+}
+
 /// An 8-bit RGB picture.
 #[derive(Clone, Debug)]
 pub struct Picture {
@@ -188,7 +193,7 @@ pub struct Cell {
 
 /// One scene of the labelled figure.
 #[derive(Clone, Debug)]
-pub struct Row {
+pub struct FigureRow {
     /// Scene name, written on the left.
     pub name: String,
     /// Smaller lines under the name.
@@ -279,7 +284,7 @@ fn with_inset(pic: &Picture, factor: u32, region: (u32, u32, u32, u32)) -> Pictu
 /// (name on the left) a row of images each with a zoomed inset of the scene's dense region and
 /// a caption under it, then a row of lower pictures (difference images) with their captions.
 /// Cells are the full-size pictures downscaled by `factor`.
-pub fn labelled_figure(rows: &[Row], factor: u32, legend: &[String]) -> Picture {
+pub fn labelled_figure(rows: &[FigureRow], factor: u32, legend: &[String]) -> Picture {
     use crate::font::{LINE, draw_text, text_width};
     let Some(first) = rows.first().and_then(|r| r.cells.first()) else {
         return Picture::filled(1, 1, [255; 3]);

@@ -2,9 +2,13 @@
 //! and the Markdown tables.
 
 use crate::faint::{Depth, depth};
-use crate::methods::{BinnedStream, Image, Method};
+use crate::figure::{Figures, write_pictures};
+use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method};
 use crate::metrics::{Scorer, Scores, score};
+use crate::scenes::Scene;
 use crate::stream::Stream;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::Path;
 use std::time::Instant;
 
 /// How the tables name HT, said once under every table that has an HT row: the lab's
@@ -226,4 +230,185 @@ pub fn vis_bias_where(e: &Evaluation, min_frags: u32) -> Vec<(String, f64, usize
             (x.method.name(), s / sel.len().max(1) as f64, sel.len())
         })
         .collect()
+}
+
+/// A progress bar on stderr (hidden when stderr is not a terminal).
+pub fn progress_bar(len: u64) -> ProgressBar {
+    let pb = ProgressBar::new(len);
+    if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}] {msg}") {
+        pb.set_style(style);
+    }
+    pb
+}
+
+/// The main job (`oit-lab run`): every scene of `scenes` at `size` with every method of
+/// [`Method::standard_list`]; writes the PNGs and figures under `out` when `pngs`
+/// ([`Figures`]), prints the Markdown tables.
+pub fn run_command(
+    size: (u32, u32),
+    seed: u64,
+    scenes: &[Scene],
+    out: &Path,
+    with_flip: bool,
+    pngs: bool,
+) -> Result<(), String> {
+    let start = Instant::now();
+    let methods = Method::standard_list();
+    let pb = progress_bar((scenes.len() * (methods.len() + 1)) as u64);
+    let mut evals = Vec::new();
+    let mut figures = Figures::new(size);
+    for sc in scenes {
+        pb.set_message(format!("{}: generating", sc.name()));
+        let stream = sc.generate(size.0, size.1, seed);
+        let e = evaluate(sc.name(), &stream, &methods, with_flip, |m| {
+            pb.set_message(format!("{}: {m}", sc.name()));
+            pb.inc(1);
+        })?;
+        if pngs {
+            figures.add(&e, &out.join(sc.name().to_ascii_lowercase()))?;
+        }
+        evals.push(e);
+    }
+    pb.finish_and_clear();
+    if pngs {
+        figures.write(out, seed)?;
+    }
+    println!(
+        "# oit-lab: {}x{}, seed {seed}, {} scenes x {} methods, {:.1} s\n",
+        size.0,
+        size.1,
+        scenes.len(),
+        methods.len(),
+        start.elapsed().as_secs_f64()
+    );
+    println!(
+        "## PSNR (dB) / mean FLIP against the A-buffer\n\n{}",
+        summary_table(&evals)
+    );
+    println!("## All metrics\n\n{}", full_table(&evals));
+    println!("## Lanes against scalar (backend {})\n", mlab::lanes::BACKEND);
+    for e in &evals {
+        let find = |m: Method| e.entries.iter().find(|x| x.method == m).map(|x| &x.image);
+        for (scalar, lanes) in [
+            (Method::Mlab(4), Method::MlabLanes(4)),
+            (Method::Hybrid(3), Method::HybridLanes(3)),
+        ] {
+            if let (Some(a), Some(b)) = (find(scalar), find(lanes)) {
+                let same = a == b;
+                println!(
+                    "- {}: {} {} {}",
+                    e.name,
+                    lanes.name(),
+                    if same { "==" } else { "DIFFERS FROM" },
+                    scalar.name()
+                );
+            }
+        }
+    }
+    println!();
+    for e in evals.iter().filter(|e| e.name == "PARTICLES") {
+        println!("## Background visibility bias on PARTICLES (mean signed error, covered pixels)\n");
+        println!("| method | >= 1 fragment | >= 32 fragments |\n|---|---:|---:|");
+        let (a, b) = (vis_bias_where(e, 1), vis_bias_where(e, 32));
+        for ((name, x, n1), (_, y, n2)) in a.iter().zip(&b) {
+            println!("| {name} | {x:+.4} ({n1} px) | {y:+.4} ({n2} px) |");
+        }
+        println!("\n{}\n", HT_NOTE);
+    }
+    if pngs {
+        println!("Figure: {}", out.join("figure.png").display());
+    }
+    Ok(())
+}
+
+/// `oit-lab evaluate`: every method of [`Method::standard_list`] against the A-buffer on the
+/// fragment dump `file` (images written to `out` if given), then the smallest MLAB `M` and
+/// HT `K` reaching `psnr_target` dB (and a mean FLIP at or below `flip_target`) on the
+/// covered pixels.
+pub fn evaluate_command(
+    file: &str,
+    psnr_target: f64,
+    flip_target: Option<f64>,
+    out: Option<&Path>,
+    with_flip: bool,
+) -> Result<(), String> {
+    let stream = crate::dump::read(Path::new(&file)).map_err(|e| e.to_string())?;
+    let methods = Method::standard_list();
+    let pb = progress_bar(methods.len() as u64 + 1);
+    let name = Path::new(&file)
+        .file_name()
+        .map_or("dump".into(), |n| n.to_string_lossy().to_string());
+    let e = evaluate(&name, &stream, &methods, with_flip, |m| {
+        pb.set_message(m.to_string());
+        pb.inc(1);
+    })?;
+    pb.finish_and_clear();
+    if let Some(d) = out {
+        write_pictures(&e, Some(d))?;
+    }
+    println!(
+        "# oit-lab evaluate {file}: {}x{}, {} fragments\n",
+        stream.width,
+        stream.height,
+        stream.frags.len()
+    );
+    println!("{}", full_table(std::slice::from_ref(&e)));
+    let goal = match flip_target {
+        Some(f) => format!("PSNR >= {psnr_target} dB and mean FLIP <= {f} on covered pixels"),
+        None => format!("PSNR >= {psnr_target} dB on covered pixels"),
+    };
+    let binned = BinnedStream::new(&stream);
+    // Judged on the covered pixels (where the reference has a fragment): the empty
+    // background is right in every method and would lift the PSNR. The whole-image values
+    // are printed beside.
+    let check = |m: Method| -> Result<(bool, String), String> {
+        let img = m.render(&binned)?;
+        let q = score(&e.reference.image, &img, &e.covered, flip_target.is_some());
+        let ok = q.covered.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f));
+        let flip = |v: Option<f64>| v.map_or(String::new(), |f| format!(", FLIP {f:.4}"));
+        let line = format!(
+            "{}: covered PSNR {:.1} dB{}; whole image PSNR {:.1} dB{}",
+            m.name(),
+            q.covered.psnr,
+            flip(q.flip_covered),
+            q.whole.psnr,
+            flip(q.whole.flip)
+        );
+        Ok((ok, line))
+    };
+    let mut found = None;
+    for m in MLAB_SIZES {
+        let (ok, line) = check(Method::Mlab(m))?;
+        eprintln!("  {line}");
+        if ok {
+            found = Some(m);
+            break;
+        }
+    }
+    match found {
+        Some(m) => println!("Smallest MLAB reaching {goal}: M = {m} ({} B/px)", 8 * m),
+        None => println!("No MLAB up to M = {} reaches {goal}", MLAB_SIZES[MLAB_SIZES.len() - 1]),
+    }
+    let mut found = None;
+    for k in HT_SIZES {
+        let (ok, line) = check(Method::Hybrid(k))?;
+        eprintln!("  {line}");
+        if ok {
+            found = Some(k);
+            break;
+        }
+    }
+    match found {
+        Some(k) => println!(
+            "Smallest HT reaching {goal}: K = {k} head rows + tail, the paper's HT {} ({} B/px)",
+            k + 1,
+            8 * (k + 1)
+        ),
+        None => println!(
+            "No HT up to K = {} head rows + tail (the paper's HT {}) reaches {goal}",
+            HT_SIZES[HT_SIZES.len() - 1],
+            HT_SIZES[HT_SIZES.len() - 1] + 1
+        ),
+    }
+    Ok(())
 }

@@ -17,8 +17,12 @@
 use crate::faint::{Depth, depth, spread};
 use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method, Weight};
 use crate::metrics::{Change, Scorer, change, srgb8};
+use crate::picture::create_dir;
+use crate::report::progress_bar;
 use crate::scenes::{Primitives, Rng, Scene};
+use std::path::Path;
 use std::sync::Mutex;
+use std::time::Instant;
 
 /// The primitives of `prims` in submission order number `order`: order 0 is the list as
 /// built, any other order a Fisher-Yates shuffle seeded from the scene seed and the order.
@@ -586,4 +590,64 @@ pub fn strip_picture(scene: Scene, seed: u64, strip: &Strip) -> crate::picture::
     );
     draw_text(&mut out, x, y + h + 4 + line, "grey: no fragment", scale, black);
     out
+}
+
+/// `oit-lab stability`: [`run_scene`] for every scene of `scenes`, the strip images under
+/// `out/stability` when `plan.strip` is set; prints the tables.
+pub fn command(plan: &Plan, scenes: &[Scene], out: &Path) -> Result<(), String> {
+    let start = Instant::now();
+    let Plan {
+        size,
+        ref seeds,
+        orders,
+        methods: ref all,
+        with_flip,
+        ..
+    } = *plan;
+    let pb = progress_bar((scenes.len() * seeds.len() * orders) as u64);
+    let mut results = Vec::new();
+    for &sc in scenes {
+        let r = run_scene(sc, plan, |seed, o| {
+            pb.set_message(format!("{} seed {seed} order {o}", sc.name()));
+            pb.inc(1);
+        })?;
+        if let Some(strip) = &r.strip {
+            let dir = out.join("stability");
+            create_dir(&dir)?;
+            strip_picture(sc, seeds[0], strip).write_png_with(
+                &dir.join(format!("{}-strip.png", sc.name().to_ascii_lowercase())),
+                png::Compression::High,
+            )?;
+        }
+        results.push(r);
+    }
+    pb.finish_and_clear();
+    println!(
+        "# oit-lab stability: {}x{}, seeds {seeds:?}, {orders} orders each (order 0 the scene's own, \
+         1-{} shuffles of its primitives), {} scenes x {} methods, {:.0} s\n",
+        size.0,
+        size.1,
+        orders - 1,
+        scenes.len(),
+        all.len(),
+        start.elapsed().as_secs_f64()
+    );
+    println!(
+        "## Quality over seeds and orders, change between orders\n\n{}",
+        table(&results, &table_methods())
+    );
+    if with_flip {
+        println!(
+            "## Smallest configuration per scene\n\n{}",
+            recommendation_table(&results)
+        );
+    }
+    println!(
+        "## Every size (covered PSNR and FLIP, min / median / max)\n\n{}",
+        table(&results, all)
+    );
+    if plan.strip.is_some() {
+        println!("Strips: {}", out.join("stability").display());
+    }
+    Ok(())
 }
