@@ -376,33 +376,30 @@ pub fn evaluate_command(
         );
         Ok((ok, line))
     };
-    let mut found = None;
-    for m in MLAB_SIZES {
-        let (ok, line) = check(Method::Mlab(m))?;
-        eprintln!("  {line}");
-        if ok {
-            found = Some(m);
-            break;
+    // The smallest size of `sizes` whose method reaches the goal.
+    let smallest = |sizes: &[usize], method: fn(usize) -> Method| -> Result<Option<usize>, String> {
+        for &n in sizes {
+            let (ok, line) = check(method(n))?;
+            eprintln!("  {line}");
+            if ok {
+                return Ok(Some(n));
+            }
         }
-    }
-    match found {
-        Some(m) => println!("Smallest MLAB reaching {goal}: M = {m} ({} B/px)", 8 * m),
+        Ok(None)
+    };
+    let bytes = |m: Method| m.storage().per_pixel;
+    match smallest(&MLAB_SIZES, Method::Mlab)? {
+        Some(m) => println!(
+            "Smallest MLAB reaching {goal}: M = {m} ({} B/px)",
+            bytes(Method::Mlab(m))
+        ),
         None => println!("No MLAB up to M = {} reaches {goal}", MLAB_SIZES[MLAB_SIZES.len() - 1]),
     }
-    let mut found = None;
-    for k in HT_SIZES {
-        let (ok, line) = check(Method::Hybrid(k))?;
-        eprintln!("  {line}");
-        if ok {
-            found = Some(k);
-            break;
-        }
-    }
-    match found {
+    match smallest(&HT_SIZES, Method::Hybrid)? {
         Some(k) => println!(
             "Smallest HT reaching {goal}: K = {k} head rows + tail, the paper's HT {} ({} B/px)",
             k + 1,
-            8 * (k + 1)
+            bytes(Method::Hybrid(k))
         ),
         None => println!(
             "No HT up to K = {} head rows + tail (the paper's HT {}) reaches {goal}",
