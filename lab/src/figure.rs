@@ -1,6 +1,6 @@
 //! The main job's figure (Figure 3 of the paper, `OUT/figure.png` and `OUT/figure-small.png`):
 //! per scene the A-buffer with its fragment counts, then each method with its difference
-//! image, laid out by [`labelled_figure`](crate::picture::labelled_figure); and the PNGs of
+//! image, laid out by [`labelled_figure`]; and the PNGs of
 //! every image, difference and FLIP map.
 
 use crate::methods::Method;

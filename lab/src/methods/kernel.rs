@@ -1,6 +1,6 @@
 //! MLAB and HT through the kernel's pixel-major framebuffers, fragment by fragment in
-//! submission order, and the one place where the lab's [`Arith`] picks the kernel's
-//! arithmetic type (`*_with`).
+//! submission order, and the lab's [`Arith`] (which the `*_with` functions, here and in
+//! [`super::lanes`], turn into the kernel's arithmetic type).
 
 use super::{BinnedStream, HT_SIZES, Image, MLAB_SIZES};
 use mlab::glam::Vec3;
@@ -10,8 +10,8 @@ use mlab::{
 
 /// The kernel's arithmetic (issue 9): how MLAB's merge rounds its unorm8 products, how a
 /// fragment is quantized to a row, and the HT tail's layout: `mlab::Paper` or
-/// `mlab::Unbiased`. The lab turns it into the kernel's type in one place, the `*_with`
-/// functions of this module ([`mlab_with`], [`hybrid_with`], ...).
+/// `mlab::Unbiased`. The lab turns it into the kernel's type only in the `*_with` functions
+/// ([`mlab_with`], [`hybrid_with`], [`mlab_lanes_with`](super::mlab_lanes_with), ...).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Arith {
     /// The paper's: products and fragments rounded to nearest, the 3 x 10-bit tail.
@@ -31,11 +31,9 @@ impl Arith {
             Arith::Unbiased => "unbiased",
         }
     }
-}
 
-impl Arith {
     /// The kernel's default arithmetic (what `MlabFramebuffer::<M>` and the other kernel
-    /// types use when none is named), which [`Method::Mlab`] and the other kernel methods
+    /// types use when none is named), which [`Method::Mlab`](super::Method::Mlab) and the other kernel methods
     /// without an arithmetic run.
     pub const DEFAULT: Arith = Arith::Unbiased;
 
@@ -153,7 +151,7 @@ fn hybrid_dyn<A: Arithmetic>(k: usize, binned: &BinnedStream) -> Result<(Image, 
     }
 }
 
-// The one place where the lab's `Arith` picks the kernel's arithmetic type.
+// Where the lab's `Arith` picks the kernel's arithmetic type (and in `lanes.rs`).
 
 /// MLAB `m` with arithmetic `arith` (scalar kernel), in submission order.
 pub fn mlab_with(m: usize, arith: Arith, binned: &BinnedStream) -> Result<Image, String> {

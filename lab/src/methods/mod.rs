@@ -10,10 +10,10 @@
 //! fragment in submission order, as a pixel shader would. A lane (SIMD) variant of the
 //! kernel becomes one more [`Method`] variant whose `render` calls it; see
 //! [`Method::standard_list`].
-
-//! The files: [`reference`] the exact A-buffer; [`kernel`] MLAB and HT through the kernel's
-//! framebuffers, and the one place where the lab's [`Arith`] picks the kernel's arithmetic
-//! type; [`lanes`] the same kernels through 8-pixel span inserts; [`baselines`] OVER, UNDER,
+//!
+//! The files: [`reference`](mod@reference) the exact A-buffer; [`kernel`] MLAB and HT
+//! through the kernel's pixel-major framebuffers, and the lab's [`Arith`]; [`lanes`] the same
+//! kernels through the kernel's span batcher and span framebuffers; [`baselines`] OVER, UNDER,
 //! WBOIT, Bavoil-Myers and Meshkin with the render-target formulas they share with
 //! [`crate::tiled`]; [`adaptive`] Adaptive Transparency. Everything public is re-exported
 //! here (`oit_lab::methods::over_step`, ...).
