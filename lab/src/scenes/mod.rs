@@ -15,6 +15,7 @@
 //! picture with more fragments (about 4x from 640x360 to 1280x720).
 
 mod build;
+mod lanes8;
 mod prims;
 mod raster;
 pub mod stats;
@@ -196,3 +197,6 @@ fn seg_dist(px: f32, py: f32, a: (f32, f32), b: (f32, f32)) -> (f32, f32) {
     let (ex, ey) = (px - a.0 - t * dx, py - a.1 - t * dy);
     ((ex * ex + ey * ey).sqrt(), t)
 }
+
+#[cfg(test)]
+mod tests;

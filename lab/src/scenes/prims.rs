@@ -1,6 +1,7 @@
 //! The primitives of the scenes: one struct per kind, with what its rasterizer evaluates at a
 //! pixel centre ([`Shade`]), and the scene's list of them in submission order.
 
+use super::lanes8::{F8, clamp01_8, lt_bits, min_sel, seg_dist8, splat};
 use super::{clamp01, lerp3, seg_dist};
 use crate::stream::Stream;
 
@@ -16,6 +17,21 @@ pub struct Shade {
     pub alpha: f32,
     /// Additive light, premultiplied.
     pub light: [f32; 3],
+}
+
+/// [`Shade`] at the eight pixel centres of a span, lane by lane: lane `i` is bit for bit what
+/// the scalar `shade(px[i], py)` gives where bit `i` of the returned mask is set (the mask
+/// is the set of lanes where the scalar shade is `Some`); other lanes hold unspecified values.
+#[derive(Clone, Copy, Debug)]
+pub struct Shade8 {
+    /// Depth per lane.
+    pub depth: F8,
+    /// Straight color per channel and lane.
+    pub color: [F8; 3],
+    /// Alpha per lane.
+    pub alpha: F8,
+    /// Additive light per channel and lane.
+    pub light: [F8; 3],
 }
 
 /// A scene's primitives in submission order, with the frame they are laid out for.
@@ -161,6 +177,38 @@ impl Strand {
             light: [0.0; 3],
         })
     }
+
+    /// [`Self::shade`] at the pixel centres `px` of line `py`, eight lanes at once (the
+    /// same operations in the same order per lane, branch-free; see [`Shade8`]).
+    #[inline(always)]
+    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+        let (a, b) = (self.a, self.b);
+        let (d, t) = seg_dist8(px, py, a, b);
+        let mut keep = 0xffu8;
+        // `seg_dist(p, a) <= d` drops the lane, as does `seg_dist(b, n) < d`.
+        if let Some(p) = self.prev {
+            keep &= !(seg_dist8(px, py, p, a).0.simd_le(d).to_bitmask() as u8);
+        }
+        if let Some(n) = self.next {
+            keep &= !(lt_bits(seg_dist8(px, py, b, n).0, d));
+        }
+        let cov = clamp01_8(splat(self.hw + 0.5) - d);
+        keep &= !(cov.simd_le(splat(0.0)).to_bitmask() as u8);
+        let z = splat(self.za) + splat(self.zb - self.za) * t;
+        let k = clamp01_8((z - splat(7.5)) / splat(5.0) + splat(self.tint));
+        let (c0, c1) = ([0.95f32, 0.78, 0.45], [0.22f32, 0.1, 0.04]);
+        let color = [0, 1, 2].map(|i| splat(c0[i]) + splat(c1[i] - c0[i]) * k);
+        let zero = splat(0.0);
+        (
+            keep,
+            Shade8 {
+                depth: z,
+                color,
+                alpha: splat(self.alpha) * cov,
+                light: [zero; 3],
+            },
+        )
+    }
 }
 
 /// A smoke or fire sprite.
@@ -215,6 +263,35 @@ impl Sprite {
                 light: [0.0; 3],
             })
         }
+    }
+
+    /// [`Self::shade`], eight lanes at once (see [`Shade8`]).
+    #[inline(always)]
+    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+        let rad = self.rad;
+        let (dx, dy) = ((px - splat(self.cx)) / splat(rad), (py - self.cy) / rad);
+        let q = dx * dx + splat(dy * dy);
+        let keep = !(q.simd_ge(splat(1.0)).to_bitmask() as u8);
+        let one_q = splat(1.0) - q;
+        let fall = one_q * one_q;
+        let heat = self.heat;
+        let sh = if self.fire {
+            Shade8 {
+                depth: splat(self.z),
+                color: [splat(1.0), splat(0.5), splat(0.2)],
+                alpha: splat(self.fa) * fall,
+                light: [splat(heat) * fall, splat(heat * 0.45) * fall, splat(heat * 0.1) * fall],
+            }
+        } else {
+            let grey = self.grey;
+            Shade8 {
+                depth: splat(self.z),
+                color: [splat(grey), splat(grey), splat(grey * 1.05)],
+                alpha: splat(self.a0) * fall,
+                light: [splat(0.0); 3],
+            }
+        };
+        (keep, sh)
     }
 }
 
@@ -393,6 +470,32 @@ impl FogSlice {
             light: [0.0; 3],
         })
     }
+
+    /// [`Self::shade`], eight lanes at once (see [`Shade8`]).
+    #[inline(always)]
+    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+        let (u, v) = ((px - splat(self.c.0)) / splat(self.h.0), (py - self.c.1) / self.h.1);
+        let (u2, v2) = (u * u, v * v);
+        let q = u2 * u2 + splat(v2 * v2);
+        let keep = !(q.simd_ge(splat(1.0)).to_bitmask() as u8);
+        let mut puff = splat(0.0);
+        for &(x, y, rad) in &self.puffs {
+            let (dx, dy) = ((px - splat(x)) / splat(rad), (py - y) / rad);
+            let d = splat(1.0) - (dx * dx + splat(dy * dy));
+            // `puff += d * d` where `d > 0`.
+            puff = d.simd_gt(splat(0.0)).select(puff + d * d, puff);
+        }
+        let one_q = splat(1.0) - q;
+        let density = one_q * one_q * (splat(0.5) + splat(0.5) * min_sel(puff, 1.0));
+        let height = 0.9 + 0.2 * (1.0 - py / self.s);
+        let sh = Shade8 {
+            depth: splat(self.z),
+            color: self.base.map(|c| splat(c * height)),
+            alpha: splat(self.amin) + splat(self.peak - self.amin) * density,
+            light: [splat(0.0); 3],
+        };
+        (keep, sh)
+    }
 }
 
 /// A Gaussian splat.
@@ -422,5 +525,25 @@ impl Splat {
             alpha,
             light: [0.0; 3],
         })
+    }
+
+    /// [`Self::shade`], eight lanes at once (see [`Shade8`]).
+    #[inline(always)]
+    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+        let dx = px - splat(self.sx);
+        let dy = py - self.sy;
+        let (ax, ay) = (self.ax, self.ay);
+        let u = (dx * splat(ax) + splat(dy * ay)) / splat(self.sa);
+        let v = (splat(dy * ax) - dx * splat(ay)) / splat(self.sb);
+        let fall = super::lanes8::splat_falloff8(u * u + v * v);
+        let alpha = min_sel(splat(self.opacity) * fall, 0.99);
+        let keep = alpha.simd_ge(splat(1.0 / 255.0)).to_bitmask() as u8;
+        let sh = Shade8 {
+            depth: splat(self.z),
+            color: self.color.map(splat),
+            alpha,
+            light: [splat(0.0); 3],
+        };
+        (keep, sh)
     }
 }

@@ -4,7 +4,8 @@
 //! as [`mlab::lanes::FragmentLanes`] (what the kernel's span insert quantizes).
 
 use super::clamp01;
-use super::prims::{Kind, Primitive, Shade};
+use super::lanes8::{F8, centres, clamp01_8, lt_bits, max0_8, min_sel, splat};
+use super::prims::{Kind, Primitive, Shade, Shade8};
 use crate::stream::Frag;
 use mlab::lanes::{FragmentLanes, LANES};
 
@@ -61,8 +62,26 @@ impl Primitive {
     /// Rasterize over the box clipped to `clip`: `emit(x, y, mask, lanes)` per span that has
     /// a fragment, `x` a multiple of 8, lines top to bottom, spans left to right. A fragment
     /// that carries neither opacity nor light (both below 1/1024) is not emitted.
+    ///
+    /// Strands, sprites, fog slices and splats are shaded eight lanes at once (`shade8`,
+    /// bit for bit the scalar `shade` per lane); the other kinds pixel by pixel. The spans
+    /// are exactly those of [`Self::raster_scalar`] (tested lane by lane).
     #[inline]
     pub fn raster<E: FnMut(u32, u32, u8, &SpanLanes)>(&self, clip: Clip, emit: &mut E) {
+        let all = |_: f32| Some((f32::NEG_INFINITY, f32::INFINITY));
+        match &self.kind {
+            Kind::Strand(p) => self.scan8(clip, |x, y| p.shade8(x, y), |y| p.line_range(y), emit),
+            Kind::Sprite(p) => self.scan8(clip, |x, y| p.shade8(x, y), |y| p.line_range(y), emit),
+            Kind::FogSlice(p) => self.scan8(clip, |x, y| p.shade8(x, y), all, emit),
+            Kind::Splat(p) => self.scan8(clip, |x, y| p.shade8(x, y), all, emit),
+            _ => self.raster_scalar(clip, emit),
+        }
+    }
+
+    /// The reference rasterizer: as [`Self::raster`], every pixel shaded on its own by the
+    /// kind's scalar `shade`.
+    #[inline]
+    pub fn raster_scalar<E: FnMut(u32, u32, u8, &SpanLanes)>(&self, clip: Clip, emit: &mut E) {
         let all = |_: f32| Some((f32::NEG_INFINITY, f32::INFINITY));
         match &self.kind {
             Kind::Strand(p) => self.scan(clip, |x, y| p.shade(x, y), |y| p.line_range(y), emit),
@@ -76,6 +95,23 @@ impl Primitive {
         }
     }
 
+    /// The box clipped to `clip` (columns, lines), `None` if empty.
+    #[inline(always)]
+    fn clipped(&self, clip: Clip) -> Option<((u32, u32), (u32, u32))> {
+        let (xa, xb) = (self.x0.max(clip.x0), self.x1.min(clip.x1));
+        let (ya, yb) = (self.y0.max(clip.y0), self.y1.min(clip.y1));
+        (xa < xb && ya < yb).then_some(((xa, xb), (ya, yb)))
+    }
+
+    /// Columns `xa..xb` narrowed to the range `(lo, hi)` of pixel centres on a line.
+    #[inline(always)]
+    fn narrow((xa, xb): (u32, u32), (lo, hi): (f32, f32)) -> (u32, u32) {
+        // Float-to-int casts saturate (infinities included); the sum saturates too.
+        let xa = xa.max((lo - 0.5).floor().max(0.0) as u32);
+        let xb = xb.min(((hi - 0.5).ceil().max(0.0) as u32).saturating_add(1));
+        (xa, xb)
+    }
+
     #[inline(always)]
     fn scan<S, R, E>(&self, clip: Clip, shade: S, range: R, emit: &mut E)
     where
@@ -83,11 +119,9 @@ impl Primitive {
         R: Fn(f32) -> Option<(f32, f32)>,
         E: FnMut(u32, u32, u8, &SpanLanes),
     {
-        let (xa, xb) = (self.x0.max(clip.x0), self.x1.min(clip.x1));
-        let (ya, yb) = (self.y0.max(clip.y0), self.y1.min(clip.y1));
-        if xa >= xb || ya >= yb {
+        let Some((cols, (ya, yb))) = self.clipped(clip) else {
             return;
-        }
+        };
         let mut lanes = FragmentLanes {
             color: [[0.0; LANES]; 3],
             alpha: [0.0; LANES],
@@ -96,10 +130,8 @@ impl Primitive {
         for y in ya..yb {
             let py = y as f32 + 0.5;
             // The kind's conservative range on this line (pixel centres `x + 0.5`).
-            let Some((lo, hi)) = range(py) else { continue };
-            // Float-to-int casts saturate (infinities included); the sum saturates too.
-            let xa = xa.max((lo - 0.5).floor().max(0.0) as u32);
-            let xb = xb.min(((hi - 0.5).ceil().max(0.0) as u32).saturating_add(1));
+            let Some(r) = range(py) else { continue };
+            let (xa, xb) = Self::narrow(cols, r);
             let mut sx = xa & !(LANES as u32 - 1);
             while sx < xb {
                 let mut mask = 0u8;
@@ -112,7 +144,7 @@ impl Primitive {
                         continue;
                     };
                     let a = clamp01(sh.alpha);
-                    let c = [0, 1, 2].map(|k| (clamp01(sh.color[k]) * a + sh.light[k].max(0.0)).min(1.0));
+                    let c = [0, 1, 2].map(|k| min1(clamp01(sh.color[k]) * a + max0(sh.light[k])));
                     if a < 1.0 / 1024.0 && c.iter().all(|&v| v < 1.0 / 1024.0) {
                         continue;
                     }
@@ -130,4 +162,66 @@ impl Primitive {
             }
         }
     }
+
+    /// [`Self::scan`] with the shading eight lanes at once: the lanes of a span outside
+    /// `xa..xb` are shaded too but masked off, as the lanes `shade8` drops and those below
+    /// the emission threshold (the same compares as the scalar scan's, per lane).
+    #[inline(always)]
+    fn scan8<S, R, E>(&self, clip: Clip, shade8: S, range: R, emit: &mut E)
+    where
+        S: Fn(F8, f32) -> (u8, Shade8),
+        R: Fn(f32) -> Option<(f32, f32)>,
+        E: FnMut(u32, u32, u8, &SpanLanes),
+    {
+        let Some((cols, (ya, yb))) = self.clipped(clip) else {
+            return;
+        };
+        let mut lanes = FragmentLanes {
+            color: [[0.0; LANES]; 3],
+            alpha: [0.0; LANES],
+            depth: [0.0; LANES],
+        };
+        let eps = splat(1.0 / 1024.0);
+        for y in ya..yb {
+            let py = y as f32 + 0.5;
+            let Some(r) = range(py) else { continue };
+            let (xa, xb) = Self::narrow(cols, r);
+            if xa >= xb {
+                continue;
+            }
+            let mut sx = xa & !(LANES as u32 - 1);
+            while sx < xb {
+                // Lanes `xa - sx ..` up to `xb - sx` (at most 8).
+                let (lo, hi) = (xa.saturating_sub(sx), (xb - sx).min(LANES as u32));
+                let inside = ((1u32 << hi) - (1u32 << lo)) as u8;
+                let (keep, sh) = shade8(centres(sx), py);
+                let a = clamp01_8(sh.alpha);
+                let c = [0, 1, 2].map(|k| min_sel(clamp01_8(sh.color[k]) * a + max0_8(sh.light[k]), 1.0));
+                let faint = lt_bits(a, eps) & lt_bits(c[0], eps) & lt_bits(c[1], eps) & lt_bits(c[2], eps);
+                let mask = inside & keep & !faint;
+                if mask != 0 {
+                    for k in 0..3 {
+                        lanes.color[k] = c[k].to_array();
+                    }
+                    lanes.alpha = a.to_array();
+                    lanes.depth = sh.depth.to_array();
+                    emit(sx, y, mask, &lanes);
+                }
+                sx += LANES as u32;
+            }
+        }
+    }
+}
+
+/// `x.max(0.0)`, written out: `x` if `x > 0`, else `+0.0` (NaN and -0.0 give `+0.0`, where
+/// `f32::max` leaves the sign of a zero unspecified).
+#[inline(always)]
+fn max0(x: f32) -> f32 {
+    if x > 0.0 { x } else { 0.0 }
+}
+
+/// `x.min(1.0)`, written out: `x` if `x < 1`, else 1 (NaN gives 1, as `f32::min` does).
+#[inline(always)]
+fn min1(x: f32) -> f32 {
+    if x < 1.0 { x } else { 1.0 }
 }

@@ -1,0 +1,286 @@
+//! The 8-wide shading against the scalar reference, bit for bit: per kind, lane by lane at
+//! many positions of many random primitives (degenerate ones, exact ties between neighbouring
+//! segments, signed zeros and NaN parameters included), then whole rasterizations (spans,
+//! masks and lanes) under clips that cut boxes anywhere, and every scene's primitives.
+
+use super::lanes8::{F8, centres};
+use super::prims::{FogSlice, Kind, Primitive, Shade, Shade8, Splat, Sprite, Strand};
+use super::raster::{Clip, SpanLanes};
+use super::{Rng, Scene};
+
+/// A value for a test primitive: mostly ordinary, often on the half-pixel grid (so that
+/// distances tie exactly at pixel centres), sometimes a signed zero.
+fn val(rng: &mut Rng, lo: f32, hi: f32) -> f32 {
+    match rng.below(10) {
+        0 => 0.0,
+        1 => -0.0,
+        2..=4 => (rng.range(lo, hi) * 2.0).round() * 0.5,
+        _ => rng.range(lo, hi),
+    }
+}
+
+fn pt(rng: &mut Rng) -> (f32, f32) {
+    (val(rng, -4.0, 36.0), val(rng, -4.0, 28.0))
+}
+
+/// A strand segment, its neighbours sometimes mirrored about its ends (exact ties), sometimes
+/// equal to them (zero-length segments).
+fn strand(rng: &mut Rng) -> Strand {
+    let (a, b) = (pt(rng), pt(rng));
+    let b = if rng.below(12) == 0 { a } else { b };
+    let near = |rng: &mut Rng, end: (f32, f32), other: (f32, f32)| match rng.below(5) {
+        0 => None,
+        1 => Some((2.0 * end.0 - other.0, 2.0 * end.1 - other.1)),
+        2 => Some(end),
+        _ => Some(pt(rng)),
+    };
+    let (prev, next) = (near(rng, a, b), near(rng, b, a));
+    Strand {
+        a,
+        b,
+        prev,
+        next,
+        hw: val(rng, 0.0, 3.0),
+        za: val(rng, 5.0, 14.0),
+        zb: val(rng, 5.0, 14.0),
+        tint: val(rng, -0.5, 0.5),
+        alpha: val(rng, 0.0, 1.2),
+    }
+}
+
+fn sprite(rng: &mut Rng) -> Sprite {
+    let fire = rng.below(2) == 0;
+    Sprite {
+        cx: val(rng, -4.0, 36.0),
+        cy: val(rng, -4.0, 28.0),
+        rad: val(rng, 0.0, 14.0),
+        z: val(rng, 20.0, 40.0),
+        fire,
+        fa: if rng.below(3) == 0 { 0.0 } else { val(rng, 0.0, 1.5) },
+        heat: val(rng, -0.5, 2.0),
+        grey: val(rng, -0.2, 1.2),
+        a0: val(rng, 0.0, 1.5),
+    }
+}
+
+fn fog(rng: &mut Rng) -> FogSlice {
+    let puff = |rng: &mut Rng| (val(rng, -8.0, 40.0), val(rng, -8.0, 32.0), val(rng, 0.0, 20.0));
+    FogSlice {
+        z: val(rng, 4.0, 60.0),
+        c: (val(rng, -4.0, 36.0), val(rng, -4.0, 28.0)),
+        h: (val(rng, 0.0, 30.0), val(rng, 0.0, 20.0)),
+        peak: val(rng, 0.0, 0.3),
+        puffs: [puff(rng), puff(rng), puff(rng)],
+        base: [val(rng, 0.0, 1.1), val(rng, 0.0, 1.1), val(rng, 0.0, 1.1)],
+        s: val(rng, 1.0, 40.0),
+        amin: if rng.below(2) == 0 {
+            1.0 / 255.0
+        } else {
+            val(rng, 0.0, 0.01)
+        },
+    }
+}
+
+fn splat(rng: &mut Rng) -> Splat {
+    let (ax, ay) = if rng.below(4) == 0 { (1.0, 0.0) } else { rng.unit2() };
+    Splat {
+        sx: val(rng, -4.0, 36.0),
+        sy: val(rng, -4.0, 28.0),
+        ax,
+        ay,
+        sa: val(rng, 0.0, 6.0),
+        sb: val(rng, 0.0, 6.0),
+        opacity: val(rng, 0.0, 1.2),
+        z: val(rng, 3.0, 7.0),
+        color: [val(rng, 0.0, 1.0), val(rng, 0.0, 1.0), val(rng, 0.0, 1.0)],
+    }
+}
+
+/// The bits of `v`, every NaN as one: Rust leaves the sign and payload of a NaN an operation
+/// returns unspecified (RFC 3514; LLVM may swap the operands of `+` and `*`), so only "NaN"
+/// is compared (no scene emits a NaN: the quantizer would refuse it).
+fn fbits(v: f32) -> u32 {
+    if v.is_nan() { f32::NAN.to_bits() } else { v.to_bits() }
+}
+
+/// Every field's bits.
+fn bits(depth: f32, color: [f32; 3], alpha: f32, light: [f32; 3]) -> [u32; 8] {
+    let v = [depth, color[0], color[1], color[2], alpha, light[0], light[1], light[2]];
+    v.map(fbits)
+}
+
+/// Compares `shade8` with `shade` lane by lane at the centres `px` of line `py`; returns the
+/// number of lanes the scalar shade keeps.
+fn same_lanes(
+    what: &str,
+    shade: impl Fn(f32, f32) -> Option<Shade>,
+    shade8: impl Fn(F8, f32) -> (u8, Shade8),
+    px: [f32; 8],
+    py: f32,
+) -> usize {
+    let (keep, s8) = shade8(F8::from(px), py);
+    let lane = |v: F8, i: usize| v.to_array()[i];
+    let mut kept = 0;
+    for (i, &x) in px.iter().enumerate() {
+        let want = shade(x, py);
+        assert_eq!(
+            keep & (1 << i) != 0,
+            want.is_some(),
+            "{what}: lane {i} at ({x}, {py}) kept"
+        );
+        if let Some(w) = want {
+            kept += 1;
+            let got = bits(
+                lane(s8.depth, i),
+                s8.color.map(|c| lane(c, i)),
+                lane(s8.alpha, i),
+                s8.light.map(|c| lane(c, i)),
+            );
+            assert_eq!(
+                got,
+                bits(w.depth, w.color, w.alpha, w.light),
+                "{what}: lane {i} at ({x}, {py})"
+            );
+        }
+    }
+    kept
+}
+
+/// Positions: pixel centres of spans over the test area, and arbitrary points.
+fn positions(rng: &mut Rng) -> ([f32; 8], f32) {
+    match rng.below(8) {
+        0 => (std::array::from_fn(|_| rng.range(-6.0, 40.0)), rng.range(-6.0, 30.0)),
+        1 => (std::array::from_fn(|_| val(rng, -6.0, 40.0)), val(rng, -6.0, 30.0)),
+        _ => {
+            let sx = 8 * rng.below(5) as u32;
+            (centres(sx).to_array(), rng.below(28) as f32 + 0.5)
+        }
+    }
+}
+
+#[test]
+fn shade8_is_the_scalar_shade_lane_by_lane() {
+    let mut rng = Rng::new(11);
+    let mut kept = [0usize; 4];
+    for _ in 0..3000 {
+        let (s, sp, f, sl) = (strand(&mut rng), sprite(&mut rng), fog(&mut rng), splat(&mut rng));
+        for _ in 0..12 {
+            let (px, py) = positions(&mut rng);
+            kept[0] += same_lanes("strand", |x, y| s.shade(x, y), |x, y| s.shade8(x, y), px, py);
+            kept[1] += same_lanes("sprite", |x, y| sp.shade(x, y), |x, y| sp.shade8(x, y), px, py);
+            kept[2] += same_lanes("fog", |x, y| f.shade(x, y), |x, y| f.shade8(x, y), px, py);
+            kept[3] += same_lanes("splat", |x, y| sl.shade(x, y), |x, y| sl.shade8(x, y), px, py);
+        }
+    }
+    // Both outcomes are exercised for every kind (of 288 000 lanes each).
+    assert!(kept.iter().all(|&k| k > 10_000 && k < 280_000), "{kept:?}");
+    // NaN positions: NaN flows through both the same way.
+    let nan = [
+        f32::NAN,
+        0.5,
+        f32::NAN,
+        1.5,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        -0.0,
+        7.5,
+    ];
+    for _ in 0..200 {
+        let (s, sp, f, sl) = (strand(&mut rng), sprite(&mut rng), fog(&mut rng), splat(&mut rng));
+        for py in [0.5, f32::NAN] {
+            same_lanes("strand", |x, y| s.shade(x, y), |x, y| s.shade8(x, y), nan, py);
+            same_lanes("sprite", |x, y| sp.shade(x, y), |x, y| sp.shade8(x, y), nan, py);
+            same_lanes("fog", |x, y| f.shade(x, y), |x, y| f.shade8(x, y), nan, py);
+            same_lanes("splat", |x, y| sl.shade(x, y), |x, y| sl.shade8(x, y), nan, py);
+        }
+    }
+}
+
+/// Every span `raster` emits: position, mask and the bits of the lanes in the mask.
+fn spans(p: &Primitive, clip: Clip, scalar: bool) -> Vec<(u32, u32, u8, Vec<u32>)> {
+    let mut out = Vec::new();
+    let mut emit = |x: u32, y: u32, mask: u8, l: &SpanLanes| {
+        let mut v = Vec::new();
+        for i in (0..8).filter(|i| mask & (1 << i) != 0) {
+            v.extend([l.color[0][i], l.color[1][i], l.color[2][i], l.alpha[i], l.depth[i]].map(fbits));
+        }
+        out.push((x, y, mask, v));
+    };
+    if scalar {
+        p.raster_scalar(clip, &mut emit);
+    } else {
+        p.raster(clip, &mut emit);
+    }
+    out
+}
+
+fn random_clip(rng: &mut Rng, w: u32, h: u32) -> Clip {
+    let (a, b) = (rng.below(w as usize + 1) as u32, rng.below(w as usize + 1) as u32);
+    let (c, d) = (rng.below(h as usize + 1) as u32, rng.below(h as usize + 1) as u32);
+    Clip {
+        x0: a.min(b),
+        y0: c.min(d),
+        x1: a.max(b),
+        y1: c.max(d),
+    }
+}
+
+#[test]
+fn raster_is_the_scalar_raster_span_by_span() {
+    let mut rng = Rng::new(12);
+    let (w, h) = (37, 29);
+    let mut emitted = 0;
+    for n in 0..4000 {
+        let kind = match n % 4 {
+            0 => Kind::Strand(strand(&mut rng)),
+            1 => Kind::Sprite(sprite(&mut rng)),
+            2 => Kind::FogSlice(fog(&mut rng)),
+            _ => Kind::Splat(splat(&mut rng)),
+        };
+        // Boxes anywhere in the frame, sometimes cutting the primitive.
+        let (x0, x1) = (rng.below(w as usize) as u32, rng.below(w as usize + 1) as u32);
+        let (y0, y1) = (rng.below(h as usize) as u32, rng.below(h as usize + 1) as u32);
+        let p = Primitive {
+            x0: x0.min(x1),
+            y0: y0.min(y1),
+            x1: x0.max(x1),
+            y1: y0.max(y1),
+            kind,
+        };
+        for clip in [
+            Clip::frame(w, h),
+            random_clip(&mut rng, w, h),
+            random_clip(&mut rng, w, h),
+        ] {
+            let want = spans(&p, clip, true);
+            emitted += want.len();
+            assert_eq!(spans(&p, clip, false), want, "{p:?} clipped to {clip:?}");
+        }
+    }
+    assert!(emitted > 10_000, "{emitted} spans");
+}
+
+#[test]
+fn every_scene_rasterizes_as_the_scalar_reference() {
+    for scene in Scene::ALL {
+        let (w, h) = if matches!(scene, Scene::Fog | Scene::Splats) {
+            (61, 35)
+        } else {
+            (203, 117)
+        };
+        let prims = scene.primitives(w, h, 4);
+        // The whole frame and bands of 8 lines offset by 3 columns.
+        let mut clips = vec![Clip::frame(w, h)];
+        clips.extend((0..h).step_by(8).map(|y| Clip {
+            x0: 3,
+            y0: y,
+            x1: w,
+            y1: (y + 8).min(h),
+        }));
+        for p in &prims.prims {
+            for &clip in &clips {
+                assert_eq!(spans(p, clip, false), spans(p, clip, true), "{}: {p:?}", scene.name());
+            }
+        }
+    }
+}
