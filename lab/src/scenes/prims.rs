@@ -20,8 +20,9 @@ pub struct Shade {
 }
 
 /// [`Shade`] at the eight pixel centres of a span, lane by lane: lane `i` is bit for bit what
-/// the scalar `shade(px[i], py)` gives where bit `i` of the returned mask is set (the mask
-/// is the set of lanes where the scalar shade is `Some`); other lanes hold unspecified values.
+/// the scalar `shade(px[i], py)` gives where bit `i` of the returned mask is set. The mask
+/// is the set of lanes where the scalar shade is `Some`, less any lane the caller did not
+/// want (`shade8(px, py, want)`); other lanes hold unspecified values.
 #[derive(Clone, Copy, Debug)]
 pub struct Shade8 {
     /// Depth per lane.
@@ -125,12 +126,25 @@ pub struct Strand {
 }
 
 impl Strand {
+    /// What f32 rounding can move a distance here by, with room to spare: 1/16 pixel plus
+    /// 2^-16 of the largest magnitude among the coordinates and `hw` (the distances' rounding
+    /// errors are below 2^-20 of it). NaN coordinates are skipped: they make every distance
+    /// NaN, which neither covers a pixel nor takes it from a neighbour.
+    #[inline(always)]
+    fn slack(&self) -> f32 {
+        let (p, n) = (self.prev.unwrap_or(self.a), self.next.unwrap_or(self.b));
+        let m = [self.a, self.b, p, n]
+            .iter()
+            .fold(self.hw.abs(), |m, &(x, y)| m.max(x.abs()).max(y.abs()));
+        1.0 / 16.0 + m * (1.0 / 65536.0)
+    }
+
     /// A conservative range of pixel-centre `x` on line `py` outside which [`Self::shade`] gives
-    /// nothing (coverage needs distance `< hw + 0.5` to the segment), with a pixel of
-    /// margin; `None` if the line misses the segment's capsule.
+    /// nothing (coverage needs distance `< hw + 0.5` to the segment; the range is the
+    /// capsule of radius `hw + 0.5` plus [`Self::slack`]); `None` if the line misses it.
     #[inline(always)]
     pub(super) fn line_range(&self, py: f32) -> Option<(f32, f32)> {
-        let r = self.hw + 1.5;
+        let r = self.hw + 0.5 + self.slack();
         let (a, b) = (self.a, self.b);
         let dy = b.1 - a.1;
         let (t0, t1) = if dy.abs() < 1e-6 {
@@ -179,21 +193,32 @@ impl Strand {
     }
 
     /// [`Self::shade`] at the pixel centres `px` of line `py`, eight lanes at once (the
-    /// same operations in the same order per lane, branch-free; see [`Shade8`]).
+    /// same operations in the same order per lane, branch-free; see [`Shade8`]); lanes not in
+    /// `want` may be dropped.
     #[inline(always)]
-    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+    pub(super) fn shade8(&self, px: F8, py: f32, want: u8) -> (u8, Shade8) {
         let (a, b) = (self.a, self.b);
         let (d, t) = seg_dist8(px, py, a, b);
-        let mut keep = 0xffu8;
-        // `seg_dist(p, a) <= d` drops the lane, as does `seg_dist(b, n) < d`.
-        if let Some(p) = self.prev {
-            keep &= !(seg_dist8(px, py, p, a).0.simd_le(d).to_bitmask() as u8);
-        }
-        if let Some(n) = self.next {
-            keep &= !(lt_bits(seg_dist8(px, py, b, n).0, d));
-        }
         let cov = clamp01_8(splat(self.hw + 0.5) - d);
-        keep &= !(cov.simd_le(splat(0.0)).to_bitmask() as u8);
+        let mut keep = want & !(cov.simd_le(splat(0.0)).to_bitmask() as u8);
+        // The neighbours only where the lanes wanted are covered (each condition alone
+        // drops a lane, so their order does not matter).
+        // A kept lane has `d < hw + 0.5`: a neighbour whose bounding box is farther than
+        // that plus the slack from every kept lane cannot take one, and is not evaluated.
+        let far = self.hw + 0.5 + self.slack();
+        if keep != 0 {
+            // `seg_dist(p, a) <= d` drops the lane, as does `seg_dist(b, n) < d`.
+            if let Some(p) = self.prev
+                && keep & near_box(px, py, p, a, far) != 0
+            {
+                keep &= !(seg_dist8(px, py, p, a).0.simd_le(d).to_bitmask() as u8);
+            }
+            if let Some(n) = self.next
+                && keep & near_box(px, py, b, n, far) != 0
+            {
+                keep &= !(lt_bits(seg_dist8(px, py, b, n).0, d));
+            }
+        }
         let z = splat(self.za) + splat(self.zb - self.za) * t;
         let k = clamp01_8((z - splat(7.5)) / splat(5.0) + splat(self.tint));
         let (c0, c1) = ([0.95f32, 0.78, 0.45], [0.22f32, 0.1, 0.04]);
@@ -209,6 +234,20 @@ impl Strand {
             },
         )
     }
+}
+
+/// The lanes whose pixel centre is not farther than `far` from the bounding box of segment
+/// `p-q` along `x` or `y` (a lower bound of the distance to the segment). A NaN coordinate
+/// may give any answer: the distance to such a segment is NaN, which takes no lane anyway.
+#[inline(always)]
+fn near_box(px: F8, py: f32, p: (f32, f32), q: (f32, f32), far: f32) -> u8 {
+    let (y0, y1) = (p.1.min(q.1), p.1.max(q.1));
+    if py - y1 > far || y0 - py > far {
+        return 0;
+    }
+    let (x0, x1) = (p.0.min(q.0), p.0.max(q.0));
+    let away = (splat(x0) - px).simd_gt(splat(far)) | (px - splat(x1)).simd_gt(splat(far));
+    !(away.to_bitmask() as u8)
 }
 
 /// A smoke or fire sprite.
@@ -267,7 +306,7 @@ impl Sprite {
 
     /// [`Self::shade`], eight lanes at once (see [`Shade8`]).
     #[inline(always)]
-    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+    pub(super) fn shade8(&self, px: F8, py: f32, _want: u8) -> (u8, Shade8) {
         let rad = self.rad;
         let (dx, dy) = ((px - splat(self.cx)) / splat(rad), (py - self.cy) / rad);
         let q = dx * dx + splat(dy * dy);
@@ -473,7 +512,7 @@ impl FogSlice {
 
     /// [`Self::shade`], eight lanes at once (see [`Shade8`]).
     #[inline(always)]
-    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+    pub(super) fn shade8(&self, px: F8, py: f32, _want: u8) -> (u8, Shade8) {
         let (u, v) = ((px - splat(self.c.0)) / splat(self.h.0), (py - self.c.1) / self.h.1);
         let (u2, v2) = (u * u, v * v);
         let q = u2 * u2 + splat(v2 * v2);
@@ -529,7 +568,7 @@ impl Splat {
 
     /// [`Self::shade`], eight lanes at once (see [`Shade8`]).
     #[inline(always)]
-    pub(super) fn shade8(&self, px: F8, py: f32) -> (u8, Shade8) {
+    pub(super) fn shade8(&self, px: F8, py: f32, _want: u8) -> (u8, Shade8) {
         let dx = px - splat(self.sx);
         let dy = py - self.sy;
         let (ax, ay) = (self.ax, self.ay);

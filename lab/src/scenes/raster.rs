@@ -70,10 +70,10 @@ impl Primitive {
     pub fn raster<E: FnMut(u32, u32, u8, &SpanLanes)>(&self, clip: Clip, emit: &mut E) {
         let all = |_: f32| Some((f32::NEG_INFINITY, f32::INFINITY));
         match &self.kind {
-            Kind::Strand(p) => self.scan8(clip, |x, y| p.shade8(x, y), |y| p.line_range(y), emit),
-            Kind::Sprite(p) => self.scan8(clip, |x, y| p.shade8(x, y), |y| p.line_range(y), emit),
-            Kind::FogSlice(p) => self.scan8(clip, |x, y| p.shade8(x, y), all, emit),
-            Kind::Splat(p) => self.scan8(clip, |x, y| p.shade8(x, y), all, emit),
+            Kind::Strand(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), |y| p.line_range(y), emit),
+            Kind::Sprite(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), |y| p.line_range(y), emit),
+            Kind::FogSlice(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), all, emit),
+            Kind::Splat(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), all, emit),
             _ => self.raster_scalar(clip, emit),
         }
     }
@@ -105,7 +105,7 @@ impl Primitive {
 
     /// Columns `xa..xb` narrowed to the range `(lo, hi)` of pixel centres on a line.
     #[inline(always)]
-    fn narrow((xa, xb): (u32, u32), (lo, hi): (f32, f32)) -> (u32, u32) {
+    pub(super) fn narrow((xa, xb): (u32, u32), (lo, hi): (f32, f32)) -> (u32, u32) {
         // Float-to-int casts saturate (infinities included); the sum saturates too.
         let xa = xa.max((lo - 0.5).floor().max(0.0) as u32);
         let xb = xb.min(((hi - 0.5).ceil().max(0.0) as u32).saturating_add(1));
@@ -169,7 +169,7 @@ impl Primitive {
     #[inline(always)]
     fn scan8<S, R, E>(&self, clip: Clip, shade8: S, range: R, emit: &mut E)
     where
-        S: Fn(F8, f32) -> (u8, Shade8),
+        S: Fn(F8, f32, u8) -> (u8, Shade8),
         R: Fn(f32) -> Option<(f32, f32)>,
         E: FnMut(u32, u32, u8, &SpanLanes),
     {
@@ -194,7 +194,7 @@ impl Primitive {
                 // Lanes `xa - sx ..` up to `xb - sx` (at most 8).
                 let (lo, hi) = (xa.saturating_sub(sx), (xb - sx).min(LANES as u32));
                 let inside = ((1u32 << hi) - (1u32 << lo)) as u8;
-                let (keep, sh) = shade8(centres(sx), py);
+                let (keep, sh) = shade8(centres(sx), py, inside);
                 let a = clamp01_8(sh.alpha);
                 let c = [0, 1, 2].map(|k| min_sel(clamp01_8(sh.color[k]) * a + max0_8(sh.light[k]), 1.0));
                 let faint = lt_bits(a, eps) & lt_bits(c[0], eps) & lt_bits(c[1], eps) & lt_bits(c[2], eps);
