@@ -153,7 +153,10 @@ impl Strand {
             }
             (0.0, 1.0)
         } else {
-            let (u, v) = ((py - r - a.1) / dy, (py + r - a.1) / dy);
+            // A reciprocal (hoisted out of the line loop): the range need not be bit-exact,
+            // only conservative, and the slack covers its rounding.
+            let inv = 1.0 / dy;
+            let (u, v) = ((py - r - a.1) * inv, (py + r - a.1) * inv);
             (u.min(v).max(0.0), u.max(v).min(1.0))
         };
         if t0 > t1 {
@@ -206,18 +209,17 @@ impl Strand {
         // A kept lane has `d < hw + 0.5`: a neighbour whose bounding box is farther than
         // that plus the slack from every kept lane cannot take one, and is not evaluated.
         let far = self.hw + 0.5 + self.slack();
-        if keep != 0 {
-            // `seg_dist(p, a) <= d` drops the lane, as does `seg_dist(b, n) < d`.
-            if let Some(p) = self.prev
-                && keep & near_box(px, py, p, a, far) != 0
-            {
-                keep &= !(seg_dist8(px, py, p, a).0.simd_le(d).to_bitmask() as u8);
-            }
-            if let Some(n) = self.next
-                && keep & near_box(px, py, b, n, far) != 0
-            {
-                keep &= !(lt_bits(seg_dist8(px, py, b, n).0, d));
-            }
+        // `seg_dist(p, a) <= d` drops the lane, as does `seg_dist(b, n) < d` (nothing is
+        // evaluated when no lane is kept).
+        if let Some(p) = self.prev
+            && keep & near_box(px, py, p, a, far) != 0
+        {
+            keep &= !(seg_dist8(px, py, p, a).0.simd_le(d).to_bitmask() as u8);
+        }
+        if let Some(n) = self.next
+            && keep & near_box(px, py, b, n, far) != 0
+        {
+            keep &= !(lt_bits(seg_dist8(px, py, b, n).0, d));
         }
         let z = splat(self.za) + splat(self.zb - self.za) * t;
         let k = clamp01_8((z - splat(7.5)) / splat(5.0) + splat(self.tint));
