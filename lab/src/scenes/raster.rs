@@ -73,7 +73,7 @@ impl Primitive {
             Kind::Strand(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), |y| p.line_range(y), emit),
             Kind::Sprite(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), |y| p.line_range(y), emit),
             Kind::FogSlice(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), all, emit),
-            Kind::Splat(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), all, emit),
+            Kind::Splat(p) => self.scan8(clip, |x, y, w| p.shade8(x, y, w), |y| p.line_range(y), emit),
             _ => self.raster_scalar(clip, emit),
         }
     }
@@ -91,7 +91,7 @@ impl Primitive {
             Kind::SphereBand(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
             Kind::Panel(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
             Kind::FogSlice(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
-            Kind::Splat(p) => self.scan(clip, |x, y| p.shade(x, y), all, emit),
+            Kind::Splat(p) => self.scan(clip, |x, y| p.shade(x, y), |y| p.line_range(y), emit),
         }
     }
 

@@ -285,24 +285,36 @@ fn every_scene_rasterizes_as_the_scalar_reference() {
     }
 }
 
-/// The line ranges of strands and sprites hold every pixel their scalar shade covers, so
+/// The line ranges of strands, sprites and splats hold every pixel their scalar shade covers, so
 /// skipping the rest changes nothing (the scans above share the ranges, so this is the test
 /// that a range is not too tight).
 #[test]
 fn line_ranges_hold_every_covered_pixel() {
-    let check = |p: &Primitive| {
+    let check = |p: &Primitive, step: u32| {
         let (shade, range): (Box<dyn Fn(f32, f32) -> bool>, Box<dyn Fn(f32) -> Option<(f32, f32)>>) = match &p.kind {
             Kind::Strand(s) => (Box::new(|x, y| s.shade(x, y).is_some()), Box::new(|y| s.line_range(y))),
             Kind::Sprite(s) => (Box::new(|x, y| s.shade(x, y).is_some()), Box::new(|y| s.line_range(y))),
+            Kind::Splat(s) => (Box::new(|x, y| s.shade(x, y).is_some()), Box::new(|y| s.line_range(y))),
             _ => return 0,
         };
         let mut covered = 0;
         for y in p.y0..p.y1 {
             let py = y as f32 + 0.5;
             let r = range(py);
+            // Every `step` quarter pixels (the range is claimed for any `x`, not only
+            // centres), and the pixel centres through the scan's own rounding to columns.
+            for q in (4 * p.x0..4 * p.x1).step_by(step as usize) {
+                let px = q as f32 * 0.25 + 0.125;
+                if shade(px, py) {
+                    covered += 1;
+                    assert!(
+                        r.is_some_and(|(lo, hi)| lo <= px && px <= hi),
+                        "({px}, {py}) outside {r:?}: {p:?}"
+                    );
+                }
+            }
             for x in p.x0..p.x1 {
                 if shade(x as f32 + 0.5, py) {
-                    covered += 1;
                     let (xa, xb) = r.map_or((1, 0), |r| Primitive::narrow((p.x0, p.x1), r));
                     assert!(xa <= x && x < xb, "pixel ({x}, {y}) outside {r:?}: {p:?}");
                 }
@@ -312,9 +324,11 @@ fn line_ranges_hold_every_covered_pixel() {
     };
     let mut rng = Rng::new(13);
     let mut covered = 0;
-    for n in 0..6000 {
-        let kind = if n % 2 == 0 {
+    for n in 0..3000 {
+        let kind = if n % 3 == 0 {
             Kind::Strand(strand(&mut rng))
+        } else if n % 3 == 1 {
+            Kind::Splat(splat(&mut rng))
         } else {
             // Radius 0 divides 0 by 0 on the centre line (a NaN `q` covers the whole line);
             // the scenes' radii are positive.
@@ -324,17 +338,24 @@ fn line_ranges_hold_every_covered_pixel() {
             }
             Kind::Sprite(sp)
         };
-        covered += check(&Primitive {
-            x0: 0,
-            y0: 0,
-            x1: 40,
-            y1: 32,
-            kind,
-        });
+        covered += check(
+            &Primitive {
+                x0: 0,
+                y0: 0,
+                x1: 40,
+                y1: 32,
+                kind,
+            },
+            1,
+        );
     }
-    for scene in [Scene::Hair, Scene::Particles] {
-        for p in &scene.primitives(1280, 720, 1).prims {
-            covered += check(p);
+    for (scene, w, h) in [
+        (Scene::Hair, 1280, 720),
+        (Scene::Particles, 1280, 720),
+        (Scene::Splats, 640, 360),
+    ] {
+        for p in &scene.primitives(w, h, 1).prims {
+            covered += check(p, 2);
         }
     }
     assert!(covered > 1_000_000, "{covered}");
