@@ -147,23 +147,27 @@ impl Strand {
         let r = self.hw + 0.5 + self.slack();
         let (a, b) = (self.a, self.b);
         let dy = b.1 - a.1;
-        let (t0, t1) = if dy.abs() < 1e-6 {
+        if dy.abs() < 1e-6 {
             if (a.1 - py).abs() > r {
                 return None;
             }
-            (0.0, 1.0)
-        } else {
-            // A reciprocal (hoisted out of the line loop): the range need not be bit-exact,
-            // only conservative, and the slack covers its rounding.
-            let inv = 1.0 / dy;
-            let (u, v) = ((py - r - a.1) * inv, (py + r - a.1) * inv);
-            (u.min(v).max(0.0), u.max(v).min(1.0))
-        };
+            return Some((a.0.min(b.0) - r, a.0.max(b.0) + r));
+        }
+        // The part of the segment within `r` of the line, in `x`, widened by `r`. A
+        // reciprocal (hoisted out of the line loop): the range need not be bit-exact, only
+        // conservative, and the slack covers its rounding.
+        let (dx, inv) = (b.0 - a.0, 1.0 / dy);
+        let (u, v) = ((py - r - a.1) * inv, (py + r - a.1) * inv);
+        let (t0, t1) = (u.min(v).max(0.0), u.max(v).min(1.0));
         if t0 > t1 {
             return None;
         }
-        let (x0, x1) = (a.0 + t0 * (b.0 - a.0), a.0 + t1 * (b.0 - a.0));
-        Some((x0.min(x1) - r, x0.max(x1) + r))
+        let (x0, x1) = (a.0 + t0 * dx, a.0 + t1 * dx);
+        // The capsule also lies within `r` of the segment's supporting line, which crosses
+        // this line at `xc`: within `r L / |dy|` of it (widened by 2^-12 for rounding).
+        let xc = a.0 + (py - a.1) * (dx * inv);
+        let w = r * (dx * dx + dy * dy).sqrt() * inv.abs() * (1.0 + 1.0 / 4096.0);
+        Some(((x0.min(x1) - r).max(xc - w), (x0.max(x1) + r).min(xc + w)))
     }
 
     #[inline(always)]
