@@ -103,12 +103,13 @@ impl Primitive {
         (xa < xb && ya < yb).then_some(((xa, xb), (ya, yb)))
     }
 
-    /// Columns `xa..xb` narrowed to the range `(lo, hi)` of pixel centres on a line.
+    /// Columns `xa..xb` narrowed to the columns whose pixel centre `x + 0.5` lies in the range
+    /// `[lo, hi]` on a line (the ranges carry their own slack for rounding).
     #[inline(always)]
     pub(super) fn narrow((xa, xb): (u32, u32), (lo, hi): (f32, f32)) -> (u32, u32) {
         // Float-to-int casts saturate (infinities included); the sum saturates too.
-        let xa = xa.max((lo - 0.5).floor().max(0.0) as u32);
-        let xb = xb.min(((hi - 0.5).ceil().max(0.0) as u32).saturating_add(1));
+        let xa = xa.max((lo - 0.5).ceil().max(0.0) as u32);
+        let xb = xb.min(((hi - 0.5).floor().max(0.0) as u32).saturating_add(1));
         (xa, xb)
     }
 
