@@ -151,14 +151,14 @@ impl Strand {
             if (a.1 - py).abs() > r {
                 return None;
             }
-            return Some((a.0.min(b.0) - r, a.0.max(b.0) + r));
+            return Some((lesser(a.0, b.0) - r, greater(a.0, b.0) + r));
         }
         // The part of the segment within `r` of the line, in `x`, widened by `r`. A
         // reciprocal (hoisted out of the line loop): the range need not be bit-exact, only
         // conservative, and the slack covers its rounding.
         let (dx, inv) = (b.0 - a.0, 1.0 / dy);
         let (u, v) = ((py - r - a.1) * inv, (py + r - a.1) * inv);
-        let (t0, t1) = (u.min(v).max(0.0), u.max(v).min(1.0));
+        let (t0, t1) = (greater(lesser(u, v), 0.0), lesser(greater(u, v), 1.0));
         if t0 > t1 {
             return None;
         }
@@ -167,7 +167,7 @@ impl Strand {
         // this line at `xc`: within `r L / |dy|` of it (widened by 2^-12 for rounding).
         let xc = a.0 + (py - a.1) * (dx * inv);
         let w = r * (dx * dx + dy * dy).sqrt() * inv.abs() * (1.0 + 1.0 / 4096.0);
-        Some(((x0.min(x1) - r).max(xc - w), (x0.max(x1) + r).min(xc + w)))
+        Some((greater(lesser(x0, x1) - r, xc - w), lesser(greater(x0, x1) + r, xc + w)))
     }
 
     #[inline(always)]
@@ -240,6 +240,19 @@ impl Strand {
             },
         )
     }
+}
+
+/// `a < b ? a : b` (one `minss`; unlike `f32::min`, not NaN-aware: the line ranges only
+/// have to hold for the coordinates a scene can have).
+#[inline(always)]
+fn lesser(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// `a > b ? a : b` (see [`lesser`]).
+#[inline(always)]
+fn greater(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
 }
 
 /// The lanes whose pixel centre is not farther than `far` from the bounding box of segment

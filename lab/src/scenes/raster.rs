@@ -107,9 +107,10 @@ impl Primitive {
     /// `[lo, hi]` on a line (the ranges carry their own slack for rounding).
     #[inline(always)]
     pub(super) fn narrow((xa, xb): (u32, u32), (lo, hi): (f32, f32)) -> (u32, u32) {
-        // Float-to-int casts saturate (infinities included); the sum saturates too.
-        let xa = xa.max((lo - 0.5).ceil().max(0.0) as u32);
-        let xb = xb.min(((hi - 0.5).floor().max(0.0) as u32).saturating_add(1));
+        // Float-to-int casts saturate (negative values and NaN give 0, infinities included);
+        // the sum saturates too.
+        let xa = xa.max((lo - 0.5).ceil() as u32);
+        let xb = xb.min(((hi - 0.5).floor() as u32).saturating_add(1));
         (xa, xb)
     }
 
