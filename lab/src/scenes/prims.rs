@@ -580,9 +580,13 @@ impl Splat {
     pub(super) fn line_range(&self, py: f32) -> Option<(f32, f32)> {
         let all = Some((f32::NEG_INFINITY, f32::INFINITY));
         let op = self.opacity as f64;
-        if !(op > 0.0) {
-            // Alpha `min(opacity * falloff, 0.99)` is at most 0 (NaN gives 0.99 everywhere).
-            return if op.is_nan() { all } else { None };
+        if op.is_nan() {
+            // Alpha `min(NaN, 0.99)` is 0.99 everywhere.
+            return all;
+        }
+        if op <= 0.0 {
+            // Alpha `min(opacity * falloff, 0.99)` is at most 0.
+            return None;
         }
         let k = 1.0 / (255.0 * op);
         let qmax = if k >= 1.0 {

@@ -202,9 +202,7 @@ impl Primitive {
                 let faint = lt_bits(a, eps) & lt_bits(c[0], eps) & lt_bits(c[1], eps) & lt_bits(c[2], eps);
                 let mask = inside & keep & !faint;
                 if mask != 0 {
-                    for k in 0..3 {
-                        lanes.color[k] = c[k].to_array();
-                    }
+                    lanes.color = c.map(|v| v.to_array());
                     lanes.alpha = a.to_array();
                     lanes.depth = sh.depth.to_array();
                     emit(sx, y, mask, &lanes);

@@ -285,13 +285,18 @@ fn every_scene_rasterizes_as_the_scalar_reference() {
     }
 }
 
+/// Whether the scalar shade covers `(x, y)`.
+type Covers<'a> = dyn Fn(f32, f32) -> bool + 'a;
+/// A kind's line range.
+type Range<'a> = dyn Fn(f32) -> Option<(f32, f32)> + 'a;
+
 /// The line ranges of strands, sprites and splats hold every pixel their scalar shade covers, so
 /// skipping the rest changes nothing (the scans above share the ranges, so this is the test
 /// that a range is not too tight).
 #[test]
 fn line_ranges_hold_every_covered_pixel() {
     let check = |p: &Primitive, step: u32| {
-        let (shade, range): (Box<dyn Fn(f32, f32) -> bool>, Box<dyn Fn(f32) -> Option<(f32, f32)>>) = match &p.kind {
+        let (shade, range): (Box<Covers>, Box<Range>) = match &p.kind {
             Kind::Strand(s) => (Box::new(|x, y| s.shade(x, y).is_some()), Box::new(|y| s.line_range(y))),
             Kind::Sprite(s) => (Box::new(|x, y| s.shade(x, y).is_some()), Box::new(|y| s.line_range(y))),
             Kind::Splat(s) => (Box::new(|x, y| s.shade(x, y).is_some()), Box::new(|y| s.line_range(y))),
@@ -333,7 +338,7 @@ fn line_ranges_hold_every_covered_pixel() {
             // Radius 0 divides 0 by 0 on the centre line (a NaN `q` covers the whole line);
             // the scenes' radii are positive.
             let mut sp = sprite(&mut rng);
-            if !(sp.rad > 0.0) {
+            if sp.rad <= 0.0 {
                 sp.rad = 0.75;
             }
             Kind::Sprite(sp)
