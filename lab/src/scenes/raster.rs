@@ -34,7 +34,8 @@ impl Clip {
     }
 }
 
-/// The lanes of one emitted span (lanes outside the mask hold stale values).
+/// The lanes of one emitted span (lanes outside the mask hold unspecified values, NaN
+/// included: read only the lanes in the mask, as the kernel's quantizer does).
 pub type SpanLanes = FragmentLanes;
 
 /// Flattening spans back into fragments (the stream of the quality tables).
