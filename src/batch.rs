@@ -173,7 +173,8 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     fn flush_slot(fb: &mut F, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
         let (x, y) = ((key as u32) * LANES as u32, (key >> 32) as u32);
         let fragments = slot.mask & !slot.rows;
-        let mut q = slot.fragments.quantize_with::<F::Arith>(fragments);
+        // Every lane pushed as a fragment holds a validated `Fragment`: no lane is invalid.
+        let mut q = slot.fragments.quantize_validated_with::<F::Arith>(fragments);
         if slot.rows != 0 {
             for lane in 0..LANES {
                 if slot.rows & (1 << lane) != 0 {
@@ -182,7 +183,6 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
                 }
             }
         }
-        // Every pushed fragment was a validated `Fragment`: none is invalid.
         let mask = q.valid | slot.rows;
         slot.mask = 0;
         slot.rows = 0;

@@ -117,6 +117,15 @@ impl FragmentLanes {
     }
 
     fn quantize_impl<A: Arithmetic>(&self, mask: u8, straight: bool) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, straight)
+        x8::quantize::<A>(self, mask, straight, true)
+    }
+
+    /// [`quantize_with`](Self::quantize_with) for lanes that hold validated
+    /// [`crate::Fragment`]s (premultiplied), without the checks: every lane in `mask` is
+    /// valid. For lanes that would fail a check the rows are unspecified (never UB, never a
+    /// panic); the span batcher only holds fragments it took as `Fragment`s.
+    #[inline]
+    pub(crate) fn quantize_validated_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
+        x8::quantize::<A>(self, mask, false, false)
     }
 }

@@ -395,23 +395,32 @@ impl RowLanes for Rows8 {
 
 /// [`FragmentLanes::quantize_with`] and [`FragmentLanes::quantize_straight_with`].
 #[inline(always)]
-pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: bool) -> QuantizedLanes {
+pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: bool, check: bool) -> QuantizedLanes {
     let zero = f32x8::ZERO;
     let one = f32x8::ONE;
     let alpha = f32x8::new(f.alpha);
     let depth = f32x8::new(f.depth);
-    // Every comparison is false for NaN, so NaN anywhere makes the lane invalid.
-    let mut ok = alpha.simd_ge(zero) & alpha.simd_le(one) & depth.abs().simd_lt(f32x8::splat(f32::INFINITY));
+    // Every comparison is false for NaN, so NaN anywhere makes the lane invalid. Without
+    // `check` (lanes of validated `Fragment`s) every lane is valid.
+    let mut ok = if check {
+        alpha.simd_ge(zero) & alpha.simd_le(one) & depth.abs().simd_lt(f32x8::splat(f32::INFINITY))
+    } else {
+        cast(u32x8::MAX)
+    };
     let mut pre = [zero; 3];
     for (c, out) in f.color.iter().zip(pre.iter_mut()) {
         let raw = f32x8::new(*c);
         *out = if straight {
-            ok &= raw.simd_ge(zero) & raw.simd_lt(f32x8::splat(f32::INFINITY));
+            if check {
+                ok &= raw.simd_ge(zero) & raw.simd_lt(f32x8::splat(f32::INFINITY));
+            }
             raw * alpha
         } else {
             raw
         };
-        ok &= out.simd_ge(zero) & out.simd_le(one);
+        if check {
+            ok &= out.simd_ge(zero) & out.simd_le(one);
+        }
     }
     let half = f32x8::splat(0.5);
     let u = match A::KIND {
@@ -424,18 +433,20 @@ pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: boo
     };
     let bytes = pre.map(|c| quantize8(c, u));
     let t = u32x8::splat(255) - quantize8(alpha, u);
-    let rgbt: [u32; LANES] = cast(bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24));
-    let z: [u32; LANES] = cast(depth);
-    let valid = (ok.to_bitmask() as u8) & mask;
-    let rows = core::array::from_fn(|i| {
-        if valid & (1 << i) != 0 {
-            Row::from_words([rgbt[i], z[i]])
-        } else {
-            Row::EMPTY
-        }
-    });
+    let rgbt = bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24);
+    // The lanes that are on and valid, as a lane mask and as bits.
+    let on = {
+        let bits = u32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
+        (u32x8::splat(mask as u32) & bits).simd_eq(bits) & cast::<f32x8, u32x8>(ok)
+    };
+    let valid = cast::<u32x8, f32x8>(on).to_bitmask() as u8;
+    // Lanes that are off hold the empty row; selected without a branch, then interleaved
+    // into rows (word0, word1) per lane.
+    let [e0, e1] = Row::EMPTY.words();
+    let rgbt: [u32; LANES] = cast(on.select(rgbt, u32x8::splat(e0)));
+    let z: [u32; LANES] = cast(on.select(cast(depth), u32x8::splat(e1)));
     QuantizedLanes {
-        rows,
+        rows: core::array::from_fn(|i| Row::from_words([rgbt[i], z[i]])),
         valid,
         invalid: mask & !valid,
     }
