@@ -709,6 +709,16 @@ impl<'a, const K: usize, A: Arithmetic> HybridFramebuffer<'a, K, A> {
     #[inline(always)]
     fn gather_span(&self, first: usize, valid: usize) -> ([[Row; LANES]; K], [A::Tail; LANES]) {
         let empty = Row::from_bytes(A::Tail::EMPTY.to_bytes());
+        // A whole span inside (the common case): a transpose with constant indices, no
+        // fill first (`get` cannot fail there; it keeps the code free of panics).
+        if valid >= LANES
+            && let Some(px) = self.rows.get(first * (K + 1)..(first + LANES) * (K + 1))
+        {
+            let at = |lane: usize, slot: usize| px.get(lane * (K + 1) + slot).copied().unwrap_or(empty);
+            let head = core::array::from_fn(|layer| core::array::from_fn(|lane| at(lane, layer)));
+            let tails: [Row; LANES] = core::array::from_fn(|lane| at(lane, K));
+            return (head, bytemuck::cast(tails));
+        }
         let mut head = [[Row::EMPTY; LANES]; K];
         let mut tails = [empty; LANES];
         // One pass over the pixels' slots (contiguous): head rows, then the tail slot.
