@@ -528,19 +528,28 @@ impl<'a, const M: usize, A: Arithmetic> MlabFramebuffer<'a, M, A> {
         self.pixels.get_mut(i).ok_or(d.out_of_bounds(x, y))
     }
 
+    /// The 8 pixels from `(x, y)` when all of them are inside.
+    #[inline(always)]
+    fn whole_span(&self, x: u32, y: u32) -> Option<&[[Row; M]; LANES]> {
+        if lanes_inside(self.dims.width, x) < LANES {
+            return None;
+        }
+        let first = y as usize * self.dims.width as usize + x as usize;
+        self.pixels
+            .get(first..first + LANES)
+            .and_then(|px| <&[[Row; M]; LANES]>::try_from(px).ok())
+    }
+
     /// The 8 pixels from `(x, y)` as a layer-major span (pixels past the edge empty): a
     /// whole-array transpose when all 8 are inside (the common case).
     #[inline(always)]
     fn span_rows(&self, x: u32, y: u32) -> [[Row; LANES]; M] {
-        let first = y as usize * self.dims.width as usize + x as usize;
-        let valid = lanes_inside(self.dims.width, x);
-        match self
-            .pixels
-            .get(first..first + LANES)
-            .map(<&[[Row; M]; LANES]>::try_from)
-        {
-            Some(Ok(px)) if valid == LANES => lanes::from_pixel_major(px),
-            _ => gather::<M>(self.flat(), M, 0, first, valid, Row::EMPTY),
+        match self.whole_span(x, y) {
+            Some(px) => lanes::from_pixel_major(px),
+            None => {
+                let first = y as usize * self.dims.width as usize + x as usize;
+                gather::<M>(self.flat(), M, 0, first, lanes_inside(self.dims.width, x), Row::EMPTY)
+            }
         }
     }
 
@@ -606,7 +615,10 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for MlabFramebuffer<'a, M, A
         let x = span
             .checked_mul(LANES as u32)
             .filter(|&x| x < self.dims.width && y < self.dims.height)?;
-        Some(lanes::mlab_resolve(&self.span_rows(x, y)))
+        Some(match self.whole_span(x, y) {
+            Some(px) => lanes::mlab_resolve_pixel_major(px),
+            None => lanes::mlab_resolve(&self.span_rows(x, y)),
+        })
     }
 
     #[inline]
@@ -617,7 +629,10 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for MlabFramebuffer<'a, M, A
         else {
             return [to_rgba8(Resolved::CLEAR.pixel(background)); LANES];
         };
-        lanes::mlab_resolve_rgba8(&self.span_rows(x, y), background)
+        match self.whole_span(x, y) {
+            Some(px) => lanes::mlab_resolve_pixel_major_rgba8(px, background),
+            None => lanes::mlab_resolve_rgba8(&self.span_rows(x, y), background),
+        }
     }
 
     fn as_rows(&self) -> &[Row] {

@@ -224,6 +224,22 @@ pub fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> ResolvedLanes {
     x8::mlab_resolve(span).lanes()
 }
 
+/// [`mlab_resolve`] of 8 pixels stored pixel-major (`[pixel][row]`, as in an
+/// [`MlabFramebuffer`](crate::MlabFramebuffer)), without transposing them first.
+#[inline]
+pub(crate) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> ResolvedLanes {
+    x8::mlab_resolve_pixel_major(pixels).lanes()
+}
+
+/// [`mlab_resolve_pixel_major`] straight to RGBA8.
+#[inline]
+pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
+    pixels: &[[Row; M]; LANES],
+    background: Background,
+) -> [[u8; 4]; LANES] {
+    x8::mlab_resolve_pixel_major(pixels).rgba8(background)
+}
+
 /// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
 #[inline]
 pub fn hybrid_resolve<const K: usize, A: Arithmetic>(span: &HybridSpan<K, A>) -> ResolvedLanes {

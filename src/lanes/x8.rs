@@ -604,6 +604,22 @@ pub(super) fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> Resolved8 {
     Resolved8 { color, t }
 }
 
+/// Eq. 5 over 8 pixels stored pixel-major (`pixels[lane][layer]`): each layer's color and
+/// transmittance words are read straight into a register in [`POSITION`] order, without
+/// transposing whole rows first. The same values as [`mlab_resolve`] of the transposed span.
+#[inline(always)]
+pub(super) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> Resolved8 {
+    let byte = u32x8::splat(0xff);
+    let layer = |j: usize| {
+        // Lane `POSITION[p]` holds pixel `p`: lanes 0..8 are pixels 0, 4, 1, 5, 2, 6, 3, 7.
+        let w = |p: usize| pixels[p][j].words()[0];
+        let rgbt = u32x8::new([w(0), w(4), w(1), w(5), w(2), w(6), w(3), w(7)]);
+        [rgbt & byte, (rgbt >> 8) & byte, (rgbt >> 16) & byte, rgbt >> 24].map(f32x8::from_u)
+    };
+    let (color, t) = crate::resolve::resolve_layers((0..M).map(layer));
+    Resolved8 { color, t }
+}
+
 /// The HT resolve of head layers and tails.
 #[inline(always)]
 pub(super) fn hybrid_resolve<T: TailFormat, const K: usize>(head: &[[Row; LANES]; K], tails: &[T; LANES]) -> Resolved8 {
