@@ -113,6 +113,27 @@ fn check<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: &mut R, ba
     check_resolves(batched);
 }
 
+/// Per-pixel inserts into both framebuffers (two arrangements): every pixel resolves
+/// bit-identically (the span framebuffers' scalar `insert_row` against the pixel-major one).
+fn check_per_pixel<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: &mut R, other: &mut B, s: &[(u32, u32, Item)]) {
+    reference.clear();
+    other.clear();
+    for &(x, y, item) in s {
+        push(reference, x, y, item);
+        push(other, x, y, item);
+    }
+    for y in 0..reference.height() {
+        for x in 0..reference.width() {
+            let (a, b) = (reference.resolve(x, y).expect("inside"), other.resolve(x, y).expect("inside"));
+            assert_eq!(
+                (a.color.to_array().map(f32::to_bits), a.transmittance.to_bits()),
+                (b.color.to_array().map(f32::to_bits), b.transmittance.to_bits()),
+                "pixel ({x}, {y})"
+            );
+        }
+    }
+}
+
 /// Every whole-framebuffer resolve against [`Framebuffer::resolve`] per pixel, exactly.
 fn check_resolves<F: Framebuffer>(fb: &F) {
     let (w, h) = (fb.width(), fb.height());
@@ -158,6 +179,11 @@ fn run<A: Arithmetic>() {
             &s,
         );
         assert_eq!(a, c, "pixel-major span inserts");
+        check_per_pixel(
+            &mut MlabFramebuffer::<4, A>::new(&mut a, w, h).expect("size"),
+            &mut SpanFramebuffer::<4, A>::new(&mut b, w, h).expect("size"),
+            &s,
+        );
 
         let mut a = vec![Row::EMPTY; (w * h * 3) as usize];
         let mut b = vec![Row::EMPTY; HybridSpanFramebuffer::<2>::rows_needed(w, h).expect("size")];
@@ -174,6 +200,11 @@ fn run<A: Arithmetic>() {
             &s,
         );
         assert_eq!(a, c, "pixel-major HT span inserts");
+        check_per_pixel(
+            &mut HybridFramebuffer::<2, A>::new(&mut a, w, h).expect("size"),
+            &mut HybridSpanFramebuffer::<2, A>::new(&mut b, w, h).expect("size"),
+            &s,
+        );
 
         // M = 1 and K = 1 too (the smallest arrays merge on every second fragment).
         let mut a = vec![Row::EMPTY; (w * h) as usize];
