@@ -10,7 +10,8 @@
 //!   s = slot of span (x / 8, y)             //   (x / 8) % 8 + 8 * (y % 32): a 64x32-pixel window
 //!   if s holds another span, or lane x % 8 is already pending in s: flush s
 //!   s.fragments[x % 8] = fragment (f32); s.mask |= 1 << (x % 8)
-//!   if s.mask == 0xff: flush s              // a full span goes at once
+//!   (a full span waits for the next push to its slot: flushed at once, its 8-lane loads
+//!    would read the f32 stores just made, which the store buffer cannot forward)
 //! flush s: rows = quantize the 8 lanes at once (FragmentLanes::quantize_with)
 //!          framebuffer.insert_span(8 * (x / 8), y, rows, s.mask); s.mask = 0
 //! ```
@@ -161,9 +162,6 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         slot.mask |= bit;
         if is_row {
             slot.rows |= bit;
-        }
-        if slot.mask == 0xff {
-            Self::flush_slot(self.fb, key, slot)?;
         }
         Ok(())
     }
