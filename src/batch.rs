@@ -27,10 +27,10 @@
 //! Coordinates are checked when a fragment is pushed, so flushes cannot fail.
 //!
 //! Measured (`docs/performance.md`, `benches/batch.rs`): for MLAB `M = 4` into a
-//! [`SpanFramebuffer`](crate::SpanFramebuffer), 1.7-2.0x faster than per-pixel inserts into an
-//! [`MlabFramebuffer`](crate::MlabFramebuffer) on x86-64-v3 and 1.4-1.6x on SSE2; for HT the
-//! lanes insert does not win yet (0.84-1.07x): an HT renderer loses nothing by inserting per
-//! pixel.
+//! [`SpanFramebuffer`](crate::SpanFramebuffer), 2.1-2.6x faster than per-pixel inserts into an
+//! [`MlabFramebuffer`](crate::MlabFramebuffer) on x86-64-v3 and 1.7-2.0x on SSE2; for HT `K = 3`
+//! into a [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer), 1.0-1.3x on x86-64-v3 and
+//! 1.1-1.4x on SSE2 (per-pixel HT, with no merge, is cheap already).
 //!
 //! The window: 64 x 32 pixels (256 spans, about 43 KiB). On the mesh of `benches/batch.rs`
 //! (the tori of `examples/rasterizer.rs` at 320 x 240, 10 pixels per triangle) it gives

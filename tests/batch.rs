@@ -115,7 +115,11 @@ fn check<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: &mut R, ba
 
 /// Per-pixel inserts into both framebuffers (two arrangements): every pixel resolves
 /// bit-identically (the span framebuffers' scalar `insert_row` against the pixel-major one).
-fn check_per_pixel<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: &mut R, other: &mut B, s: &[(u32, u32, Item)]) {
+fn check_per_pixel<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(
+    reference: &mut R,
+    other: &mut B,
+    s: &[(u32, u32, Item)],
+) {
     reference.clear();
     other.clear();
     for &(x, y, item) in s {
@@ -124,7 +128,10 @@ fn check_per_pixel<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: 
     }
     for y in 0..reference.height() {
         for x in 0..reference.width() {
-            let (a, b) = (reference.resolve(x, y).expect("inside"), other.resolve(x, y).expect("inside"));
+            let (a, b) = (
+                reference.resolve(x, y).expect("inside"),
+                other.resolve(x, y).expect("inside"),
+            );
             assert_eq!(
                 (a.color.to_array().map(f32::to_bits), a.transmittance.to_bits()),
                 (b.color.to_array().map(f32::to_bits), b.transmittance.to_bits()),
