@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The kernel's tests (`cargo test -p mlab --tests --lib`: the unit tests in src/ and every file in
-# tests/, lanes == scalar byte for byte among them) on the SIMD backends that `wide` picks at
+# The kernel's tests (`cargo test -p mlab --lib` and every file in tests/ but the scalar-only
+# properties.rs: lanes == scalar byte for byte among them) on the SIMD backends that `wide` picks at
 # compile time beyond the two native x86-64 runs of .ci/run (SSE2, AVX2). Called by .ci/run;
 # runs alone too: `bash .ci/backends.sh [v4|neon|simd128|portable]...` (default: all).
 #
@@ -28,6 +28,10 @@ export CARGO_TERM_COLOR=never
 # Line tables only: panics still name file and line; the builds are smaller and faster.
 export CARGO_PROFILE_DEV_DEBUG=line-tables-only
 NO_BENCH="--cfg mlab_no_bench_deps"
+# Every test file that runs the lanes (the unit tests of src/ included). tests/properties.rs (the
+# scalar kernel against the f64 oracle; no lanes, no `wide`) runs natively in .ci/run only: on
+# these targets it would test the same scalar Rust again, for a build of its own (CI time).
+LANE_TESTS="--test lanes --test spans --test batch --test reliability --test unbiased --test layout --test bad_input"
 
 step() { echo; echo "==== $* ($(date +%T))"; }
 # CPU seconds (user + system) of the finished children of this shell, into CPU_S (no
@@ -68,7 +72,7 @@ kernel_tests() {
   local name="$1" want="$2" cases="$3"
   shift 3
   # shellcheck disable=SC2086
-  MLAB_EXPECT_BACKEND="$want" PROPTEST_CASES="$cases" cargo test -p mlab --tests --lib "$@" \
+  MLAB_EXPECT_BACKEND="$want" PROPTEST_CASES="$cases" cargo test -p mlab --lib $LANE_TESTS "$@" \
     -- ${HARNESS_ARGS:-}
   # The same check once more, printed (the run above already failed on a wrong backend).
   MLAB_EXPECT_BACKEND="$want" cargo test -q -p mlab --test lanes backend_is_the_expected_one "$@" \

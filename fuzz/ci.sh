@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Fuzz smoke run for CI (issue 5), called by .ci/run. Every target runs for a bounded time
-# (FUZZ_SECONDS, default 20 s) from the committed seeds, two targets at a time (one per core),
+# (FUZZ_SECONDS, default 15 s) from the committed seeds, two targets at a time (one per core),
 # on the backends in FUZZ_BACKENDS: "default" (SSE2 lanes, what a plain build gets; CI's
 # choice) and/or "v3" (x86-64-v3, AVX2 lanes), each in its own target dir. CI fuzzes the
 # default build only, to stay within its 15 minutes: the AVX2 lanes are proven byte-identical
@@ -11,7 +11,7 @@
 # dir, so the committed seeds are never modified.
 set -euo pipefail
 cd "$(dirname "$0")"
-SECS="${FUZZ_SECONDS:-20}"
+SECS="${FUZZ_SECONDS:-15}"
 BACKENDS="${FUZZ_BACKENDS:-default}"
 TARGETS=(mlab_stream hybrid_stream rows_from_bytes lanes_masks)
 

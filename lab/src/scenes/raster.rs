@@ -125,11 +125,7 @@ impl Primitive {
         let Some((cols, (ya, yb))) = self.clipped(clip) else {
             return;
         };
-        let mut lanes = FragmentLanes {
-            color: [[0.0; LANES]; 3],
-            alpha: [0.0; LANES],
-            depth: [0.0; LANES],
-        };
+        let mut lanes = FragmentLanes::TRANSPARENT;
         for y in ya..yb {
             let py = y as f32 + 0.5;
             // The kind's conservative range on this line (pixel centres `x + 0.5`).
@@ -179,11 +175,7 @@ impl Primitive {
         let Some((cols, (ya, yb))) = self.clipped(clip) else {
             return;
         };
-        let mut lanes = FragmentLanes {
-            color: [[0.0; LANES]; 3],
-            alpha: [0.0; LANES],
-            depth: [0.0; LANES],
-        };
+        let mut lanes = FragmentLanes::TRANSPARENT;
         let eps = splat(1.0 / 1024.0);
         for y in ya..yb {
             let py = y as f32 + 0.5;
