@@ -133,6 +133,19 @@ impl SpanDims {
     }
 }
 
+/// Run `f` on the rows of one lane of `N` layers (one pixel of a span), gathered into an
+/// array and scattered back: a pixel insert in scalar code on span storage.
+#[inline(always)]
+fn with_lane<const N: usize>(layers: &mut [[Row; LANES]; N], lane: usize, f: impl FnOnce(&mut [Row; N])) {
+    let mut px: [Row; N] = core::array::from_fn(|j| layers[j].get(lane).copied().unwrap_or(Row::EMPTY));
+    f(&mut px);
+    for (layer, r) in layers.iter_mut().zip(px) {
+        if let Some(slot) = layer.get_mut(lane) {
+            *slot = r;
+        }
+    }
+}
+
 /// The lanes of a span insert, rotated so that lane `i` sits at `(i + shift) % 8`.
 fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
     let mut r = *rows;
@@ -266,13 +279,7 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for SpanFramebuffer<'a, M, A
             return self.insert_span(x - lane as u32, y, &[row; LANES], 1 << lane);
         }
         if let Some(s) = self.spans.get_mut(i) {
-            let mut px: [Row; M] = core::array::from_fn(|j| s[j].get(lane).copied().unwrap_or(Row::EMPTY));
-            crate::mlab::insert_with::<A, M>(&mut px, row);
-            for (layer, r) in s.iter_mut().zip(px) {
-                if let Some(slot) = layer.get_mut(lane) {
-                    *slot = r;
-                }
-            }
+            with_lane(s, lane, |px| crate::mlab::insert_with::<A, M>(px, row));
         }
         Ok(())
     }
@@ -469,13 +476,7 @@ impl<'a, const K: usize, A: Arithmetic> Framebuffer for HybridSpanFramebuffer<'a
         if let Some((head, tails)) = self.parts_mut(i)
             && let Some(tail) = tails.get_mut(lane)
         {
-            let mut px: [Row; K] = core::array::from_fn(|j| head[j].get(lane).copied().unwrap_or(Row::EMPTY));
-            crate::hybrid::insert(&mut px, tail, row);
-            for (layer, r) in head.iter_mut().zip(px) {
-                if let Some(slot) = layer.get_mut(lane) {
-                    *slot = r;
-                }
-            }
+            with_lane(head, lane, |px| crate::hybrid::insert(px, tail, row));
         }
         Ok(())
     }

@@ -498,7 +498,12 @@ fn unpermute<T: Copy>(x: [T; LANES]) -> [T; LANES] {
 /// Color and transmittance bytes of one layer of 8 rows, as exact f32 (`[R, G, B, T]`).
 #[inline(always)]
 fn layer_bytes(layer: &[Row; LANES]) -> [f32x8; 4] {
-    let rgbt = words0(Rows8::load(layer));
+    rgbt_bytes(words0(Rows8::load(layer)))
+}
+
+/// The `[R, G, B, T]` bytes of 8 color words, as exact f32.
+#[inline(always)]
+fn rgbt_bytes(rgbt: u32x8) -> [f32x8; 4] {
     let byte = u32x8::splat(0xff);
     [rgbt & byte, (rgbt >> 8) & byte, (rgbt >> 16) & byte, rgbt >> 24].map(f32x8::from_u)
 }
@@ -609,12 +614,10 @@ pub(super) fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> Resolved8 {
 /// transposing whole rows first. The same values as [`mlab_resolve`] of the transposed span.
 #[inline(always)]
 pub(super) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> Resolved8 {
-    let byte = u32x8::splat(0xff);
     let layer = |j: usize| {
         // Lane `POSITION[p]` holds pixel `p`: lanes 0..8 are pixels 0, 4, 1, 5, 2, 6, 3, 7.
         let w = |p: usize| pixels[p][j].words()[0];
-        let rgbt = u32x8::new([w(0), w(4), w(1), w(5), w(2), w(6), w(3), w(7)]);
-        [rgbt & byte, (rgbt >> 8) & byte, (rgbt >> 16) & byte, rgbt >> 24].map(f32x8::from_u)
+        rgbt_bytes(u32x8::new([w(0), w(4), w(1), w(5), w(2), w(6), w(3), w(7)]))
     };
     let (color, t) = crate::resolve::resolve_layers((0..M).map(layer));
     Resolved8 { color, t }
