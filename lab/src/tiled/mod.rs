@@ -185,7 +185,7 @@ impl TiledRenderer {
             .zip(out.chunks_mut((w * lines) as usize))
             .enumerate()
             .collect();
-        work.into_par_iter()
+        work.into_par_iter().with_max_len(1)
             .map(|(b, (mut band, out))| {
                 band.clear();
                 let y0 = b as u32 * lines;
@@ -207,7 +207,7 @@ impl TiledRenderer {
             .zip(out.chunks_mut(w * lines as usize))
             .enumerate()
             .collect();
-        work.into_par_iter()
+        work.into_par_iter().with_max_len(1)
             .map(|(b, (target, out))| {
                 target.fill([bg[0], bg[1], bg[2], f16::ONE]);
                 let y0 = b as u32 * lines;
@@ -251,7 +251,7 @@ impl TiledRenderer {
             .zip(out.chunks_mut(w * lines as usize))
             .enumerate()
             .collect();
-        work.into_par_iter()
+        work.into_par_iter().with_max_len(1)
             .map(|(b, ((acc, reveal), out))| {
                 acc.fill([f16::ZERO; 4]);
                 reveal.fill(255);
@@ -294,6 +294,7 @@ impl TiledRenderer {
         let results: Vec<Result<(u64, usize), String>> = out
             .par_chunks_mut(w * lines as usize)
             .enumerate()
+            .with_max_len(1)
             .map_init(abuffer::Scratch::default, |scratch, (b, out)| {
                 let y0 = b as u32 * lines;
                 let clip = band_clip(scene, y0, lines);
