@@ -8,7 +8,7 @@
 //! timed frames, and prints one [`Measure`] line that the parent parses.
 
 use crate::scenes::Scene;
-use crate::tiled::{PrimBins, TiledMethod, TiledRenderer, raster_only, replay_mlab4, storage_bytes};
+use crate::tiled::{PrimBins, TileSize, TiledMethod, TiledRenderer, raster_only, replay_mlab4, storage_bytes};
 use std::path::Path;
 use std::time::Instant;
 
@@ -21,8 +21,8 @@ pub struct Plan {
     pub reps: usize,
     /// Thread counts (each a `rayon` pool of that size).
     pub threads: Vec<usize>,
-    /// Lines per band.
-    pub band_lines: u32,
+    /// Tile size (lines per band, columns per tile).
+    pub tile: TileSize,
     /// Frame size.
     pub size: (u32, u32),
     /// Scene seed.
@@ -198,8 +198,8 @@ pub struct Measure {
     pub what: What,
     /// Threads.
     pub threads: usize,
-    /// Lines per band.
-    pub band_lines: u32,
+    /// Tile size.
+    pub tile: TileSize,
     /// Pixels in the frame.
     pub pixels: usize,
     /// Fragments in the frame.
@@ -212,7 +212,7 @@ pub struct Measure {
     pub held: u64,
     /// Bytes of the primitive list.
     pub prims: u64,
-    /// The most fragments one band of the A-buffer held (0 for other methods).
+    /// The most fragments one tile of the A-buffer held (0 for other methods).
     pub band_fragments: u64,
 }
 
@@ -244,7 +244,7 @@ impl Measure {
             self.scene.name(),
             self.what.key(),
             self.threads,
-            self.band_lines,
+            self.tile,
             self.pixels,
             self.fragments,
             t.median,
@@ -271,7 +271,7 @@ impl Measure {
             scene: Scene::from_name(f[0])?,
             what: What::from_key(f[1])?,
             threads: int(2)? as usize,
-            band_lines: int(3)? as u32,
+            tile: f[3].parse().ok()?,
             pixels: int(4)? as usize,
             fragments: int(5)?,
             timing: Timing {
@@ -310,7 +310,7 @@ pub fn measure(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<
         scene,
         what,
         threads,
-        band_lines: plan.band_lines,
+        tile: plan.tile,
         pixels: out.len(),
         fragments: 0,
         timing: Timing::of(vec![0.0]),
@@ -322,7 +322,7 @@ pub fn measure(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<
     match what {
         What::Frame(method) => {
             let pool = pool(threads)?;
-            let mut r = TiledRenderer::new(plan.band_lines);
+            let mut r = TiledRenderer::tiled(plan.tile);
             let mut n = 0;
             m.timing = pool.install(|| {
                 time(plan.warmup, plan.reps, || {
@@ -335,7 +335,7 @@ pub fn measure(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<
             m.band_fragments = r.abuffer_peak_fragments() as u64;
         }
         What::Replay => {
-            let (sums, cpu, n) = replay_mlab4(&prims, plan.band_lines, plan.warmup, plan.reps, threads_cpu_seconds)?;
+            let (sums, cpu, n) = replay_mlab4(&prims, plan.tile, plan.warmup, plan.reps, threads_cpu_seconds)?;
             let wall: f64 = sums.iter().sum::<f64>() / sums.len().max(1) as f64;
             m.timing = Timing {
                 cpu_per_wall: cpu / wall,
@@ -348,7 +348,7 @@ pub fn measure(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<
             let mut bins = PrimBins::default();
             let mut n = 0;
             m.timing = time(plan.warmup, plan.reps, || {
-                n = raster_only(&prims, &mut bins, plan.band_lines);
+                n = raster_only(&prims, &mut bins, plan.tile);
                 Ok(())
             })?;
             m.fragments = n;
@@ -377,8 +377,8 @@ pub fn measure_in_child(
             &format!("{}x{}", plan.size.0, plan.size.1),
             "--seed",
             &plan.seed.to_string(),
-            "--band-lines",
-            &plan.band_lines.to_string(),
+            "--tile",
+            &plan.tile.to_string(),
             "--warmup",
             &plan.warmup.to_string(),
             "--reps",
@@ -402,12 +402,12 @@ pub fn measure_in_child(
 
 /// Every configuration of a bench run, each in a child process: per scene the process with
 /// its primitives only, the replay (one thread), every method at every thread count, and MLAB 4
-/// at each band height of `bands` (one thread and the most threads).
+/// at each tile size of `tiles` (one thread and the most threads).
 pub fn run(
     exe: &std::path::Path,
     scenes: &[Scene],
     plan: &Plan,
-    bands: &[u32],
+    tiles: &[TileSize],
     mut log: impl FnMut(&Measure),
 ) -> Result<Vec<Measure>, String> {
     let mut all = Vec::new();
@@ -427,11 +427,8 @@ pub fn run(
             }
         }
         let tmax = plan.threads.iter().copied().max().unwrap_or(1);
-        for &l in bands.iter().filter(|&&l| l != plan.band_lines) {
-            let p = Plan {
-                band_lines: l,
-                ..plan.clone()
-            };
+        for &tile in tiles.iter().filter(|&&t| t != plan.tile) {
+            let p = Plan { tile, ..plan.clone() };
             let mut ts = vec![1, tmax];
             ts.dedup();
             for t in ts {
@@ -442,25 +439,27 @@ pub fn run(
     Ok(all)
 }
 
-/// MLAB 4 against band height (from the measures of [`run`] with several band heights).
+/// MLAB 4 against tile size (from the measures of [`run`] with several tile sizes).
 pub fn band_table(all: &[Measure]) -> String {
     let mut rows: Vec<&Measure> = all
         .iter()
         .filter(|m| m.what == What::Frame(TiledMethod::Mlab4))
         .collect();
-    rows.sort_by_key(|m| (m.scene as usize, m.threads, m.band_lines));
+    rows.sort_by_key(|m| (m.scene as usize, m.threads, m.tile.lines, m.tile.width));
     let mut s = String::from(
-        "| scene | threads | lines per band | ms (median) | spread | ns / fragment | peak RSS MiB |\n|---|---:|---:|---:|---:|---:|---:|\n",
+        "| scene | threads | tile (columns x lines; 0: whole lines) | ms (median) | spread | CPU ms | ns / fragment | CPU ns / fragment | peak RSS MiB |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n",
     );
     for m in rows {
         s += &format!(
-            "| {} | {} | {} | {:.2} | {:.0}% | {:.2} | {:.1} |\n",
+            "| {} | {} | {} | {:.2} | {:.0}% | {:.2} | {:.2} | {:.2} | {:.1} |\n",
             m.scene.name(),
             m.threads,
-            m.band_lines,
+            m.tile,
             m.timing.median * 1e3,
             m.timing.spread_percent(),
+            m.timing.cpu * 1e3,
             m.ns_per_fragment(),
+            m.cpu_ns_per_fragment(),
             mib(m.peak_rss)
         );
     }
@@ -480,7 +479,7 @@ pub fn tables(all: &[Measure]) -> String {
     for m in all.iter().filter(|m| m.what != What::Idle) {
         let find = |what: What, threads: usize| {
             all.iter()
-                .find(|x| x.scene == m.scene && x.what == what && x.threads == threads && x.band_lines == m.band_lines)
+                .find(|x| x.scene == m.scene && x.what == what && x.threads == threads && x.tile == m.tile)
         };
         let ratio = |x: Option<&Measure>| {
             x.map_or("-".to_string(), |x| {
@@ -534,7 +533,7 @@ pub fn tables(all: &[Measure]) -> String {
     for m in all.iter().filter(|m| m.threads > 1) {
         if let Some(one) = all
             .iter()
-            .find(|x| x.scene == m.scene && x.what == m.what && x.threads == 1 && x.band_lines == m.band_lines)
+            .find(|x| x.scene == m.scene && x.what == m.what && x.threads == 1 && x.tile == m.tile)
         {
             let sp = one.timing.median / m.timing.median;
             s += &format!(
@@ -560,7 +559,7 @@ pub fn tables(all: &[Measure]) -> String {
     {
         let whole = storage_bytes(TiledMethod::ABuffer, m.pixels, m.fragments as usize);
         s += &format!(
-            "| A-buffer on {}, whole frame as Table 1 counts it (12 B x {} fragments + heads) | {:.1} |\n| A-buffer on {}, tiled: the largest band's {} fragments | {:.1} |\n",
+            "| A-buffer on {}, whole frame as Table 1 counts it (12 B x {} fragments + heads) | {:.1} |\n| A-buffer on {}, tiled: the largest tile's {} fragments | {:.1} |\n",
             m.scene.name(),
             m.fragments,
             whole as f64 / m.pixels as f64,
@@ -681,40 +680,40 @@ pub fn scaling_svg(results: &[Measure], title: &str) -> String {
 }
 
 /// `oit-lab bench`: every scene of `scenes` with every method and thread count of `plan`
-/// (and MLAB 4 at the band heights `bands`), each configuration in a child process of this
+/// (and MLAB 4 at the tile sizes `tiles`), each configuration in a child process of this
 /// program ([`measure_in_child`]); prints the tables and writes the scaling plot to `svg`.
-pub fn command(plan: &Plan, scenes: &[Scene], bands: &[u32], svg: Option<&Path>) -> Result<(), String> {
+pub fn command(plan: &Plan, scenes: &[Scene], tiles: &[TileSize], svg: Option<&Path>) -> Result<(), String> {
     let Plan {
         warmup,
         reps,
         ref threads,
-        band_lines,
+        tile,
         size,
         seed,
     } = *plan;
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let exe = std::env::current_exe().map_err(|e| format!("cannot find this program: {e}"))?;
     println!(
-        "# oit-lab bench: {}x{}, seed {seed}, bands of {band_lines} lines, {warmup} warm-up + {reps} timed frames, \
+        "# oit-lab bench: {}x{}, seed {seed}, tiles {tile} (columns x lines, 0: whole lines), {warmup} warm-up + {reps} timed frames, \
          threads {threads:?} ({cores} cores available), lanes backend {}, one child process per configuration\n",
         size.0,
         size.1,
         mlab::lanes::BACKEND
     );
-    let all = run(&exe, scenes, plan, bands, |m| {
+    let all = run(&exe, scenes, plan, tiles, |m| {
         eprintln!(
-            "  {} {} {} threads, {} lines: {:.2} ms ({:.2} ns/fragment, spread {:.0}%, peak RSS {:.1} MiB)",
+            "  {} {} {} threads, tiles {}: {:.2} ms ({:.2} ns/fragment, spread {:.0}%, peak RSS {:.1} MiB)",
             m.scene.name(),
             m.what.name(),
             m.threads,
-            m.band_lines,
+            m.tile,
             m.timing.median * 1e3,
             m.ns_per_fragment(),
             m.timing.spread_percent(),
             m.peak_rss as f64 / 1048576.0
         )
     })?;
-    let (main_runs, band_runs): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|m| m.band_lines == band_lines);
+    let (main_runs, band_runs): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|m| m.tile == tile);
     println!("{}", tables(&main_runs));
     if !band_runs.is_empty() {
         let mut b: Vec<_> = band_runs;
@@ -724,7 +723,7 @@ pub fn command(plan: &Plan, scenes: &[Scene], bands: &[u32], svg: Option<&Path>)
                 .filter(|m| m.what == What::Frame(TiledMethod::Mlab4))
                 .cloned(),
         );
-        println!("## MLAB 4 against band height\n\n{}", band_table(&b));
+        println!("## MLAB 4 against tile size\n\n{}", band_table(&b));
     }
     if let Some(path) = svg {
         let title = format!("Tiled frames, {}x{}, {} cores", size.0, size.1, cores);

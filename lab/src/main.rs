@@ -5,6 +5,7 @@
 
 use oit_lab::methods::Arith;
 use oit_lab::scenes::Scene;
+use oit_lab::tiled::TileSize;
 use oit_lab::{bench, dump, faint, report, stability};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -68,7 +69,7 @@ u64 count, then per fragment u32 x, u32 y, f32 depth, 3 x f32 premultiplied colo
 ";
 
 const BENCH_HELP: &str = "\
-oit-lab bench: whole frames with the tiled renderer (primitives binned into bands, rasterized
+oit-lab bench: whole frames with the tiled renderer (primitives binned into tiles, rasterized
 straight into each method's target, rayon): MLAB 4 (both arithmetics), the A-buffer, WBOIT and
 OVER, and the kernel-only replay of MLAB 4's span inserts; median and spread of repeated frames,
 thread scaling, peak resident memory of a child process per configuration
@@ -82,7 +83,10 @@ OPTIONS:
     --scenes A,B,...  scenes (default HAIR,PARTICLES,FOG,SPLATS)
     --threads 1,2,..  thread counts (default 1, 2, 4, 8, 16 up to the machine's cores)
     --band-lines N    lines per band (default oit_lab::tiled::DEFAULT_BAND_LINES)
-    --bands A,B,...   also time MLAB 4 at these band heights (1 thread and the most threads)
+    --tile-width N    columns per tile, a multiple of 8 (default 0: whole lines)
+    --tile WxL        both at once (W 0: whole lines)
+    --bands A,B,...   also time MLAB 4 at these tile sizes, each L (whole lines) or WxL
+                      (1 thread and the most threads)
     --warmup N        untimed frames first (default 2)
     --reps N          timed frames, median reported (default 7)
     --one S,M,T       (internal) measure scene S, method M, T threads in this process
@@ -305,7 +309,7 @@ fn parse_list<T: std::str::FromStr>(a: &mut Args, name: &str) -> Result<Option<V
         .map(|x| {
             x.trim()
                 .parse()
-                .map_err(|_| usage(format!("{name}: '{x}' is not a number")))
+                .map_err(|_| usage(format!("{name}: '{x}' is not a valid value")))
         })
         .collect::<Result<Vec<T>, _>>()
         .map(Some)
@@ -362,7 +366,18 @@ fn cmd_bench(mut a: Args) -> Result<(), Fail> {
         oit_lab::tiled::DEFAULT_BAND_LINES,
     )
     .max(1);
-    let bands = parse_list::<u32>(&mut a, "--bands")?.unwrap_or_default();
+    let tile_width = first(
+        parse_list::<u32>(&mut a, "--tile-width")?,
+        oit_lab::tiled::DEFAULT_TILE_WIDTH,
+    );
+    let mut tile = TileSize {
+        width: tile_width,
+        lines: band_lines,
+    };
+    if let Some(t) = parse_list::<TileSize>(&mut a, "--tile")? {
+        tile = first(Some(t), tile);
+    }
+    let bands = parse_list::<TileSize>(&mut a, "--bands")?.unwrap_or_default();
     let warmup = first(parse_list::<usize>(&mut a, "--warmup")?, 2);
     let reps = first(parse_list::<usize>(&mut a, "--reps")?, 7);
     let one = a.value("--one")?;
@@ -372,7 +387,7 @@ fn cmd_bench(mut a: Args) -> Result<(), Fail> {
         warmup,
         reps,
         threads,
-        band_lines,
+        tile,
         size,
         seed,
     };

@@ -8,7 +8,7 @@ use mlab::{Arithmetic, Background, Framebuffer, Paper, Row, SpanFramebuffer, Unb
 use oit_lab::methods::{BinnedStream, Method, Weight};
 use oit_lab::scenes::{Primitives, Scene};
 use oit_lab::stream::Stream;
-use oit_lab::tiled::{TiledMethod, TiledRenderer, replay_mlab4, storage_bytes};
+use oit_lab::tiled::{TileSize, TiledMethod, TiledRenderer, replay_mlab4, storage_bytes};
 
 fn pool(threads: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
@@ -18,8 +18,12 @@ fn pool(threads: usize) -> rayon::ThreadPool {
 }
 
 fn render(p: &Primitives, m: TiledMethod, lines: u32, threads: usize) -> (Vec<[u8; 4]>, u64) {
+    render_tiled(p, m, TileSize::band(lines), threads)
+}
+
+fn render_tiled(p: &Primitives, m: TiledMethod, tile: TileSize, threads: usize) -> (Vec<[u8; 4]>, u64) {
     let mut out = vec![[7u8; 4]; p.width as usize * p.height as usize];
-    let mut r = TiledRenderer::new(lines);
+    let mut r = TiledRenderer::tiled(tile);
     let n = pool(threads).install(|| r.render(m, p, &mut out)).unwrap();
     (out, n)
 }
@@ -70,9 +74,11 @@ fn lab_rgba8(m: Method, s: &Stream) -> Vec<[u8; 4]> {
 }
 
 #[test]
-fn every_band_height_and_thread_count_equals_one_band_one_thread() {
+fn every_tile_size_and_thread_count_equals_one_band_one_thread() {
     // Widths not a multiple of 8 (a partial last span), 37 and 19 lines leave a short last
     // band; FOG and SPLATS (hundreds of layers per pixel) on a smaller frame to stay quick.
+    // Tiles: whole lines, 8 columns (the narrowest), 16 and 40 columns (a short last tile;
+    // 13 rounds up to 16), one tile wider than the frame.
     for scene in Scene::ALL {
         let (w, h) = if matches!(scene, Scene::Fog | Scene::Splats) {
             (43, 19)
@@ -84,12 +90,22 @@ fn every_band_height_and_thread_count_equals_one_band_one_thread() {
         for m in TiledMethod::ALL {
             let (whole, n) = render(&p, m, p.height, 1);
             assert_eq!(n, frags, "{} {}: fragment count", scene.name(), m.name());
-            for (lines, threads) in [(1, 2), (8, 3), (h - 1, 1)] {
-                let (got, n) = render(&p, m, lines, threads);
+            for (width, lines, threads) in [
+                (0, 1, 2),
+                (0, 8, 3),
+                (0, h - 1, 1),
+                (8, 8, 2),
+                (13, 5, 3),
+                (40, 16, 2),
+                (8, h, 1),
+                (w + 9, 3, 2),
+            ] {
+                let tile = TileSize { width, lines };
+                let (got, n) = render_tiled(&p, m, tile, threads);
                 assert_eq!(n, frags);
                 assert!(
                     got == whole,
-                    "{} {}: bands of {lines}, {threads} threads differ from one band",
+                    "{} {}: tiles {tile}, {threads} threads differ from one band",
                     scene.name(),
                     m.name()
                 );
@@ -176,9 +192,23 @@ fn abuffer_is_close_to_the_exact_reference() {
 #[test]
 fn replay_counts_the_same_fragments() {
     let p = Scene::Particles.primitives(80, 40, 1);
-    let (times, _, n) = replay_mlab4(&p, 8, 0, 3, || 0.0).unwrap();
-    assert_eq!(times.len(), 3);
-    assert_eq!(n, p.stream().frags.len() as u64);
+    for tile in [TileSize::band(8), TileSize { width: 24, lines: 8 }] {
+        let (times, _, n) = replay_mlab4(&p, tile, 0, 3, || 0.0).unwrap();
+        assert_eq!(times.len(), 3);
+        assert_eq!(n, p.stream().frags.len() as u64, "{tile}");
+    }
+}
+
+#[test]
+fn tile_sizes_parse_and_print() {
+    assert_eq!("16".parse::<TileSize>(), Ok(TileSize::band(16)));
+    assert_eq!("64x32".parse::<TileSize>(), Ok(TileSize { width: 64, lines: 32 }));
+    assert_eq!("0x8".parse::<TileSize>(), Ok(TileSize::band(8)));
+    for bad in ["0", "64x0", "x8", "64x", "a", "-8", ""] {
+        assert!(bad.parse::<TileSize>().is_err(), "{bad}");
+    }
+    let t = TileSize { width: 64, lines: 32 };
+    assert_eq!(t.to_string().parse::<TileSize>(), Ok(t));
 }
 
 #[test]

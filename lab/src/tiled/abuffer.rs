@@ -1,4 +1,4 @@
-//! The tiled A-buffer's per-band work: a fragment array in submission order, a counting sort
+//! The tiled A-buffer's per-tile work: a fragment array in submission order, a counting sort
 //! by pixel (a pixel's fragments newest first), an insertion sort by depth per pixel (stable:
 //! on equal depth the later submission stays in front), then f32 front to back.
 
@@ -6,7 +6,7 @@ use mlab::glam::Vec3;
 use mlab::lanes::LANES;
 use mlab::{Row, to_rgba8};
 
-/// A worker's arrays, reused from band to band.
+/// A worker's arrays, reused from tile to tile.
 #[derive(Debug, Default)]
 pub(super) struct Scratch {
     /// `(pixel inside the band, row)` in submission order.
@@ -17,14 +17,14 @@ pub(super) struct Scratch {
 }
 
 impl Scratch {
-    /// Start a band of `pixels` pixels.
+    /// Start a tile of `pixels` pixels.
     pub(super) fn begin(&mut self, pixels: usize) {
         self.frags.clear();
         self.start.clear();
         self.start.resize(pixels + 1, 0);
     }
 
-    /// Add the lanes of `mask` at band pixels `p .. p + 8`.
+    /// Add the lanes of `mask` at tile pixels `p .. p + 8`.
     #[inline]
     pub(super) fn push_span(&mut self, p: u32, rows: &[Row; LANES], mask: u8) {
         let mut m = mask;
@@ -35,7 +35,14 @@ impl Scratch {
         }
     }
 
-    /// Fragments in the band.
+    /// Bytes held (capacities, as allocated).
+    pub(super) fn bytes(&self) -> usize {
+        self.frags.capacity() * std::mem::size_of::<(u32, Row)>()
+            + self.start.capacity() * 4
+            + self.sorted.capacity() * std::mem::size_of::<Row>()
+    }
+
+    /// Fragments in the tile.
     pub(super) fn len(&self) -> usize {
         self.frags.len()
     }
