@@ -470,12 +470,12 @@ fn mib(b: u64) -> f64 {
     b as f64 / 1048576.0
 }
 
-/// The tables of a bench run (markdown).
-pub fn tables(all: &[Measure]) -> String {
+/// The tables of a bench run (markdown) of a `width`-wide frame.
+pub fn tables(all: &[Measure], width: u32) -> String {
     let mut s = String::new();
     s += "## Frame timings (median, spread = (max - min) / median; memory = peak RSS of the child process)\n\n";
-    s += "| scene | method | threads | ms (median) | min - max ms | spread | CPU ms | CPU / wall | ns / fragment | CPU ns / fragment | peak RSS MiB | accounted MiB | RSS / accounted | bytes / pixel (RSS) | time / MLAB 4 | CPU / MLAB 4 | CPU / replay |\n";
-    s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    s += "| scene | method | threads | ms (median) | min - max ms | spread | CPU ms | CPU / wall | ns / fragment | CPU ns / fragment | peak RSS MiB | accounted MiB | RSS / accounted | frame path MiB (RSS - idle) | / accounted - primitives | bytes / pixel (RSS) | time / MLAB 4 | CPU / MLAB 4 | CPU / replay |\n";
+    s += "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for m in all.iter().filter(|m| m.what != What::Idle) {
         let find = |what: What, threads: usize| {
             all.iter()
@@ -500,8 +500,22 @@ pub fn tables(all: &[Measure]) -> String {
             ),
             _ => ("-".into(), "-".into()),
         };
+        // The frame path's own memory: the peak above the process that only built the
+        // primitives (both measured), against what it holds by design without them.
+        let idle = all.iter().find(|x| x.scene == m.scene && x.what == What::Idle);
+        let (own, own_rel) = match (m.what, idle) {
+            (What::Frame(_), Some(i)) => {
+                let own = m.peak_rss.saturating_sub(i.peak_rss);
+                let acc = m.accounted().saturating_sub(m.prims);
+                (
+                    format!("{:.1}", mib(own)),
+                    format!("{:.2}", own as f64 / acc.max(1) as f64),
+                )
+            }
+            _ => ("-".into(), "-".into()),
+        };
         s += &format!(
-            "| {} ({:.1} M frags) | {} | {} | {:.2} | {:.2} - {:.2} | {:.0}% | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {acc} | {rel} | {:.1} | {} | {} | {} |\n",
+            "| {} ({:.1} M frags) | {} | {} | {:.2} | {:.2} - {:.2} | {:.0}% | {:.2} | {:.2} | {:.2} | {:.2} | {:.1} | {acc} | {rel} | {own} | {own_rel} | {:.1} | {} | {} | {} |\n",
             m.scene.name(),
             m.fragments as f64 / 1e6,
             m.what.name(),
@@ -550,8 +564,21 @@ pub fn tables(all: &[Measure]) -> String {
     s += &format!(
         "\n## Storage per frame ([`storage_bytes`]: target + RGBA8 output), {px} pixels\n\n| method | bytes / pixel |\n|---|---:|\n"
     );
+    let tile = all.first().map_or_else(TileSize::default, |m| m.tile);
+    let columns = if tile.width == 0 { width } else { tile.width.min(width) };
+    let tile_px = columns.next_multiple_of(8) as usize * tile.lines as usize;
     for method in [TiledMethod::Mlab4, TiledMethod::Wboit, TiledMethod::Over] {
-        s += &format!("| {} | {} |\n", method.name(), storage_bytes(method, 1, 0));
+        // The tiled renderer holds one tile's target per worker, not the frame's.
+        let per_worker = storage_bytes(method, tile_px, 0) - 4 * tile_px;
+        s += &format!(
+            "| {0}, a whole-frame target | {1} |\n| {0}, tiled: one {2}x{5} tile's target per worker ({3} B) + output | {4:.2} per worker + 4 |\n",
+            method.name(),
+            storage_bytes(method, 1, 0),
+            columns.next_multiple_of(8),
+            per_worker,
+            per_worker as f64 / px.max(1) as f64,
+            tile.lines
+        );
     }
     for m in all
         .iter()
@@ -714,7 +741,7 @@ pub fn command(plan: &Plan, scenes: &[Scene], tiles: &[TileSize], svg: Option<&P
         )
     })?;
     let (main_runs, band_runs): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|m| m.tile == tile);
-    println!("{}", tables(&main_runs));
+    println!("{}", tables(&main_runs, size.0));
     if !band_runs.is_empty() {
         let mut b: Vec<_> = band_runs;
         b.extend(

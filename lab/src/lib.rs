@@ -18,8 +18,9 @@
 //!   spreads of the quality and the change between orders.
 //! - [`font`]: the 5x7 bitmap font of the figures' labels.
 //! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.
-//! - [`tiled`]: whole frames on every core: primitives binned into bands and rasterized
-//!   straight into each method's target (`rayon`), MLAB and the baselines.
+//! - [`tiled`]: whole frames on every core: primitives binned into bands and tiles and
+//!   rasterized straight into each worker's tile-sized target (`rayon`), MLAB and the
+//!   baselines.
 
 #![forbid(unsafe_code)]
 
