@@ -284,7 +284,7 @@ pub fn hybrid_resolve_rgba8<const K: usize, A: Arithmetic>(
 }
 
 /// [`hybrid_resolve_rgba8`] on separate head layers and tails.
-#[inline]
+#[inline(always)]
 pub fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],

@@ -615,9 +615,22 @@ pub(super) fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> Resolved8 {
 #[inline(always)]
 pub(super) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> Resolved8 {
     let layer = |j: usize| {
-        // Lane `POSITION[p]` holds pixel `p`: lanes 0..8 are pixels 0, 4, 1, 5, 2, 6, 3, 7.
-        let w = |p: usize| pixels[p][j].words()[0];
-        rgbt_bytes(u32x8::new([w(0), w(4), w(1), w(5), w(2), w(6), w(3), w(7)]))
+        let words = if M == 1 {
+            // The rows are contiguous: two vector loads, then the color words in
+            // [`POSITION`] order as for a span's layer ([`words0`]). (The inserts below took
+            // 11-13 % longer on AVX2 than on SSE2 here.)
+            let q = |p: usize| cast::<Row, u64>(pixels[p][j]);
+            let (a, b) = (
+                u64x4::new([q(0), q(1), q(2), q(3)]),
+                u64x4::new([q(4), q(5), q(6), q(7)]),
+            );
+            words0(Rows8 { a: cast(a), b: cast(b) })
+        } else {
+            // Lane `POSITION[p]` holds pixel `p`: lanes 0..8 are pixels 0, 4, 1, 5, 2, 6, 3, 7.
+            let w = |p: usize| pixels[p][j].words()[0];
+            u32x8::new([w(0), w(4), w(1), w(5), w(2), w(6), w(3), w(7)])
+        };
+        rgbt_bytes(words)
     };
     let (color, t) = crate::resolve::resolve_layers((0..M).map(layer));
     Resolved8 { color, t }
