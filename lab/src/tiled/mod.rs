@@ -442,6 +442,23 @@ fn mlab_tile<A: Arithmetic>(
     Ok(n)
 }
 
+/// Rasterize `prims` clipped to `clip` and call `f(i, lane, lanes)` for every fragment, `i`
+/// its pixel in the tile (row major), `lane` its lane in `lanes`; returns the fragment count.
+fn each_fragment(scene: &Primitives, prims: &[u32], clip: Clip, mut f: impl FnMut(usize, usize, &SpanLanes)) -> u64 {
+    let tw = (clip.x1 - clip.x0) as usize;
+    let mut n = 0;
+    for &i in prims {
+        scene.prims[i as usize].raster(clip, &mut |x, y, mask, l: &SpanLanes| {
+            n += count(mask);
+            let row = (y - clip.y0) as usize * tw + (x - clip.x0) as usize;
+            for lane in (0..LANES).filter(|&lane| mask & (1 << lane) != 0) {
+                f(row + lane, lane, l);
+            }
+        });
+    }
+    n
+}
+
 /// One OVER tile (unsorted, `RGBA16F` target).
 fn over_tile(
     t: &mut Target,
@@ -455,24 +472,14 @@ fn over_tile(
     let target = &mut t.half[..tw * th];
     let bg = scene.background.map(f16::from_f32);
     target.fill([bg[0], bg[1], bg[2], f16::ONE]);
-    let mut n = 0;
-    for &i in prims {
-        scene.prims[i as usize].raster(clip, &mut |x, y, mask, l: &SpanLanes| {
-            n += count(mask);
-            let row = (y - clip.y0) as usize * tw + (x - clip.x0) as usize;
-            for lane in 0..LANES {
-                if mask & (1 << lane) == 0 {
-                    continue;
-                }
-                let Some(px) = target.get_mut(row + lane) else { continue };
-                let mut c = [px[0].to_f32(), px[1].to_f32(), px[2].to_f32()];
-                let mut t = px[3].to_f32();
-                let color = [l.color[0][lane], l.color[1][lane], l.color[2][lane]];
-                over_step(&mut c, &mut t, color, l.alpha[lane]);
-                *px = [c[0], c[1], c[2], t].map(f16::from_f32);
-            }
-        });
-    }
+    let n = each_fragment(scene, prims, clip, |i, lane, l| {
+        let Some(px) = target.get_mut(i) else { return };
+        let mut c = [px[0].to_f32(), px[1].to_f32(), px[2].to_f32()];
+        let mut t = px[3].to_f32();
+        let color = [l.color[0][lane], l.color[1][lane], l.color[2][lane]];
+        over_step(&mut c, &mut t, color, l.alpha[lane]);
+        *px = [c[0], c[1], c[2], t].map(f16::from_f32);
+    });
     with_tile_pixels(&mut t.pixels, out, scene.width as usize, clip, |px| {
         for (c, o) in target.iter().zip(px.iter_mut()) {
             *o = to_rgba8(Vec4::new(c[0].to_f32(), c[1].to_f32(), c[2].to_f32(), 1.0));
@@ -495,27 +502,17 @@ fn wboit_tile(
     let (acc, reveal) = (&mut t.half[..tw * th], &mut t.reveal[..tw * th]);
     acc.fill([f16::ZERO; 4]);
     reveal.fill(255);
-    let mut n = 0;
-    for &i in prims {
-        scene.prims[i as usize].raster(clip, &mut |x, y, mask, l: &SpanLanes| {
-            n += count(mask);
-            let row = (y - clip.y0) as usize * tw + (x - clip.x0) as usize;
-            for lane in 0..LANES {
-                if mask & (1 << lane) == 0 {
-                    continue;
-                }
-                let (Some(a), Some(r)) = (acc.get_mut(row + lane), reveal.get_mut(row + lane)) else {
-                    continue;
-                };
-                let color = [l.color[0][lane], l.color[1][lane], l.color[2][lane]];
-                let (alpha, depth) = (l.alpha[lane], l.depth[lane]);
-                let wt = Weight::Eq7.eval(color, alpha, depth, 0.0);
-                let mut v = a.map(f16::to_f32);
-                wboit_step(&mut v, r, color, alpha, wt);
-                *a = v.map(f16::from_f32);
-            }
-        });
-    }
+    let n = each_fragment(scene, prims, clip, |i, lane, l| {
+        let (Some(a), Some(r)) = (acc.get_mut(i), reveal.get_mut(i)) else {
+            return;
+        };
+        let color = [l.color[0][lane], l.color[1][lane], l.color[2][lane]];
+        let (alpha, depth) = (l.alpha[lane], l.depth[lane]);
+        let wt = Weight::Eq7.eval(color, alpha, depth, 0.0);
+        let mut v = a.map(f16::to_f32);
+        wboit_step(&mut v, r, color, alpha, wt);
+        *a = v.map(f16::from_f32);
+    });
     let bg = scene.background;
     with_tile_pixels(&mut t.pixels, out, scene.width as usize, clip, |px| {
         for ((a, r), o) in acc.iter().zip(reveal.iter()).zip(px.iter_mut()) {
