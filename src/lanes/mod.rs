@@ -232,7 +232,7 @@ pub(crate) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES
 }
 
 /// [`mlab_resolve_pixel_major`] straight to RGBA8.
-#[inline]
+#[inline(always)]
 pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     pixels: &[[Row; M]; LANES],
     background: Background,
