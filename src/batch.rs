@@ -12,7 +12,8 @@
 //!   s.fragments[x % 8] = fragment (f32); s.mask |= 1 << (x % 8)
 //!   (a full span waits for the next push to its slot: flushed at once, its 8-lane loads
 //!    would read the f32 stores just made, which the store buffer cannot forward)
-//! flush s: rows = quantize the 8 lanes at once (FragmentLanes::quantize_with)
+//! flush s: rows = quantize the 8 lanes at once (as FragmentLanes::quantize_with, without
+//!          its validation: every lane was a validated Fragment), rows pushed as rows kept
 //!          framebuffer.insert_span(8 * (x / 8), y, rows, s.mask); s.mask = 0
 //! ```
 //!

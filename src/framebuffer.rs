@@ -573,17 +573,11 @@ impl<'a, const M: usize, A: Arithmetic> MlabFramebuffer<'a, M, A> {
             .and_then(|px| <&[[Row; M]; LANES]>::try_from(px).ok())
     }
 
-    /// The 8 pixels from `(x, y)` as a layer-major span (pixels past the edge empty): a
-    /// whole-array transpose when all 8 are inside (the common case).
-    #[inline(always)]
-    fn span_rows(&self, x: u32, y: u32) -> [[Row; LANES]; M] {
-        match self.whole_span(x, y) {
-            Some(px) => lanes::from_pixel_major(px),
-            None => {
-                let first = y as usize * self.dims.width as usize + x as usize;
-                gather::<M>(self.flat(), M, 0, first, lanes_inside(self.dims.width, x), Row::EMPTY)
-            }
-        }
+    /// The 8 pixels from `(x, y)` as a layer-major span, for an edge span (where
+    /// `whole_span` said no): the pixels inside gathered one by one, the others empty.
+    fn edge_span_rows(&self, x: u32, y: u32) -> [[Row; LANES]; M] {
+        let first = y as usize * self.dims.width as usize + x as usize;
+        gather::<M>(self.flat(), M, 0, first, lanes_inside(self.dims.width, x), Row::EMPTY)
     }
 
     fn flat(&self) -> &[Row] {
@@ -650,7 +644,7 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for MlabFramebuffer<'a, M, A
             .filter(|&x| x < self.dims.width && y < self.dims.height)?;
         Some(match self.whole_span(x, y) {
             Some(px) => lanes::mlab_resolve_pixel_major(px),
-            None => lanes::mlab_resolve(&self.span_rows(x, y)),
+            None => lanes::mlab_resolve(&self.edge_span_rows(x, y)),
         })
     }
 
@@ -664,7 +658,7 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for MlabFramebuffer<'a, M, A
         };
         match self.whole_span(x, y) {
             Some(px) => lanes::mlab_resolve_pixel_major_rgba8(px, background),
-            None => lanes::mlab_resolve_rgba8(&self.span_rows(x, y), background),
+            None => lanes::mlab_resolve_rgba8(&self.edge_span_rows(x, y), background),
         }
     }
 
