@@ -100,55 +100,74 @@ drivers! {
     ht_batcher_pixel_major: HybridFramebuffer<'_, 3> => batched;
     ht_per_pixel_spans: HybridSpanFramebuffer<'_, 3> => per_pixel;
     ht_batcher_spans: HybridSpanFramebuffer<'_, 3> => batched;
+    batcher_alone: Probe<'_> => batched;
+}
+
+/// A framebuffer that counts the span inserts it gets and, with `discard`, drops them (after
+/// `black_box`, so the batcher's work is kept): the batcher alone, without the insert it
+/// feeds. Unbiased arithmetic, as every framebuffer of the insert benches.
+struct Probe<'a> {
+    fb: SpanFramebuffer<'a, 1>,
+    spans: u64,
+    discard: bool,
+}
+
+impl Framebuffer for Probe<'_> {
+    type Arith = mlab::Unbiased;
+    type Band<'c>
+        = SpanFramebuffer<'c, 1>
+    where
+        Self: 'c;
+    fn width(&self) -> u32 {
+        self.fb.width()
+    }
+    fn height(&self) -> u32 {
+        self.fb.height()
+    }
+    fn rows_per_pixel(&self) -> usize {
+        1
+    }
+    fn clear(&mut self) {}
+    fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), mlab::FramebufferError> {
+        self.fb.insert_row(x, y, row)
+    }
+    #[inline]
+    fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; 8], mask: u8) -> Result<(), mlab::FramebufferError> {
+        self.spans += 1;
+        if self.discard {
+            black_box((x, y, rows, mask));
+            return Ok(());
+        }
+        self.fb.insert_span(x, y, rows, mask)
+    }
+    fn resolve(&self, x: u32, y: u32) -> Result<mlab::Resolved, mlab::FramebufferError> {
+        self.fb.resolve(x, y)
+    }
+    fn resolve_span(&self, span: u32, y: u32) -> Option<mlab::lanes::ResolvedLanes> {
+        self.fb.resolve_span(span, y)
+    }
+    fn as_rows(&self) -> &[Row] {
+        self.fb.as_rows()
+    }
+    fn reborrow(&mut self) -> SpanFramebuffer<'_, 1> {
+        self.fb.reborrow()
+    }
+    fn split_lines(self, _: u32) -> (Self, Self) {
+        unreachable!("not split")
+    }
 }
 
 /// Fragments per span insert of the batcher on a stream (printed once per stream).
 fn occupancy(w: u32, h: u32, events: &[Event]) -> f64 {
-    struct Count<'a, 'b>(SpanFramebuffer<'a, 1>, &'b mut u64);
-    impl<'b> Framebuffer for Count<'_, 'b> {
-        type Arith = mlab::Unbiased;
-        type Band<'c>
-            = SpanFramebuffer<'c, 1>
-        where
-            Self: 'c;
-        fn width(&self) -> u32 {
-            self.0.width()
-        }
-        fn height(&self) -> u32 {
-            self.0.height()
-        }
-        fn rows_per_pixel(&self) -> usize {
-            1
-        }
-        fn clear(&mut self) {}
-        fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), mlab::FramebufferError> {
-            self.0.insert_row(x, y, row)
-        }
-        fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; 8], mask: u8) -> Result<(), mlab::FramebufferError> {
-            *self.1 += 1;
-            self.0.insert_span(x, y, rows, mask)
-        }
-        fn resolve(&self, x: u32, y: u32) -> Result<mlab::Resolved, mlab::FramebufferError> {
-            self.0.resolve(x, y)
-        }
-        fn resolve_span(&self, span: u32, y: u32) -> Option<mlab::lanes::ResolvedLanes> {
-            self.0.resolve_span(span, y)
-        }
-        fn as_rows(&self) -> &[Row] {
-            self.0.as_rows()
-        }
-        fn reborrow(&mut self) -> SpanFramebuffer<'_, 1> {
-            self.0.reborrow()
-        }
-        fn split_lines(self, _: u32) -> (Self, Self) {
-            unreachable!("not split")
-        }
-    }
     let mut storage = vec![Row::EMPTY; SpanFramebuffer::<1>::rows_needed(w, h).expect("size")];
-    let mut n = 0;
-    let mut fb = Count(SpanFramebuffer::new_cleared(&mut storage, w, h).expect("size"), &mut n);
-    batched(&mut fb, events);
-    events.len() as f64 / n as f64
+    let fb = SpanFramebuffer::new_cleared(&mut storage, w, h).expect("size");
+    let mut probe = Probe {
+        fb,
+        spans: 0,
+        discard: false,
+    };
+    batched(&mut probe, events);
+    events.len() as f64 / probe.spans as f64
 }
 
 macro_rules! insert_benches {
@@ -186,6 +205,16 @@ macro_rules! insert_benches {
         $g.bench_function(BenchmarkId::new("ht_batcher_spans", $k), |b| {
             b.iter(|| ht_batcher_spans(&mut fb, black_box(ev)))
         });
+        // The batcher's own work (push, quantization), the span inserts discarded: the part
+        // of the batcher benches above that is not the framebuffer's insert.
+        let mut st = vec![Row::EMPTY; SpanFramebuffer::<1>::rows_needed(w, h).expect("size")];
+        let fb = SpanFramebuffer::<1>::new_cleared(&mut st, w, h).expect("size");
+        let mut probe = Probe {
+            fb,
+            spans: 0,
+            discard: true,
+        };
+        $g.bench_function("batcher_alone", |b| b.iter(|| batcher_alone(&mut probe, black_box(ev))));
     }};
 }
 
