@@ -97,6 +97,7 @@ drivers! {
     mlab_per_pixel_spans: SpanFramebuffer<'_, 4> => per_pixel;
     mlab_batcher_spans: SpanFramebuffer<'_, 4> => batched;
     ht_per_pixel_pixel_major: HybridFramebuffer<'_, 3> => per_pixel;
+    // Passed straight through to per-pixel inserts (`Framebuffer::SPAN_INSERTS_PAY`).
     ht_batcher_pixel_major: HybridFramebuffer<'_, 3> => batched;
     ht_per_pixel_spans: HybridSpanFramebuffer<'_, 3> => per_pixel;
     ht_batcher_spans: HybridSpanFramebuffer<'_, 3> => batched;

@@ -31,7 +31,11 @@
 //! [`SpanFramebuffer`](crate::SpanFramebuffer), 2.1-2.6x faster than per-pixel inserts into an
 //! [`MlabFramebuffer`](crate::MlabFramebuffer) on x86-64-v3 and 1.7-2.0x on SSE2; for HT `K = 3`
 //! into a [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer), 1.0-1.3x on x86-64-v3 and
-//! 1.1-1.4x on SSE2 (per-pixel HT, with no merge, is cheap already).
+//! 1.1-1.4x on SSE2 (per-pixel HT, with no merge, is cheap already). Into the pixel-major
+//! [`HybridFramebuffer`](crate::HybridFramebuffer) span inserts were slower than per-pixel
+//! inserts (0.75-0.88x), so there the batcher passes each fragment straight through
+//! ([`Framebuffer::SPAN_INSERTS_PAY`]); into an [`MlabFramebuffer`](crate::MlabFramebuffer)
+//! it is 1.6x faster on x86-64-v3, 1.2-1.4x on SSE2.
 //!
 //! The window: 64 x 32 pixels (256 spans, about 43 KiB). On the mesh of `benches/batch.rs`
 //! (the tori of `examples/rasterizer.rs` at 320 x 240, 10 pixels per triangle) it gives
@@ -117,6 +121,9 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     /// the pixel is outside.
     #[inline]
     pub fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
+        if !F::SPAN_INSERTS_PAY {
+            return self.fb.insert(x, y, fragment);
+        }
         let c = fragment.color();
         self.push(x, y, [c.x, c.y, c.z, fragment.alpha()], fragment.depth(), false)
     }
@@ -124,6 +131,9 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     /// Push a quantized row for pixel `(x, y)`.
     #[inline]
     pub fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        if !F::SPAN_INSERTS_PAY {
+            return self.fb.insert_row(x, y, row);
+        }
         // The row's words travel as the bits of two f32 lanes (moved, never computed with:
         // bit-exact on every target the lanes support, which `tests/batch.rs` checks with
         // arbitrary bytes, NaN patterns included).

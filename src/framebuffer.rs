@@ -277,6 +277,15 @@ pub trait Framebuffer {
     where
         Self: 'b;
 
+    /// Whether fragments gathered into span inserts go in faster than one pixel at a time
+    /// (measured, `docs/performance.md`): true everywhere but the pixel-major
+    /// [`HybridFramebuffer`], whose span insert gathers and scatters the pixels around an
+    /// insert that has no merge to share (HT `K = 3`: 0.75-0.88x per-pixel speed through a
+    /// [`SpanBatcher`](crate::SpanBatcher)). A [`SpanBatcher`](crate::SpanBatcher) over a
+    /// framebuffer where this is false passes each fragment straight to
+    /// [`insert`](Self::insert) (nothing pending, the same bytes).
+    const SPAN_INSERTS_PAY: bool = true;
+
     /// Width in pixels.
     fn width(&self) -> u32;
 
@@ -663,7 +672,8 @@ impl<'a, const M: usize, A: Arithmetic> Framebuffer for MlabFramebuffer<'a, M, A
     }
 
     /// Line by line, the whole spans straight from the pixel slice (no per-span bounds
-    /// check, the lanes resolve inlined), the partial last span as [`resolve_span_rgba8`].
+    /// check, the lanes resolve inlined), the partial last span as
+    /// [`resolve_span_rgba8`](Framebuffer::resolve_span_rgba8).
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
         let (width, height) = (self.dims.width, self.dims.height);
         let mut lines = self.pixels.chunks_exact(width.max(1) as usize);
@@ -813,6 +823,9 @@ impl<'a, const K: usize, A: Arithmetic> Framebuffer for HybridFramebuffer<'a, K,
         = HybridFramebuffer<'b, K, A>
     where
         Self: 'b;
+
+    /// Per-pixel HT inserts are faster than span inserts here: see the trait's docs.
+    const SPAN_INSERTS_PAY: bool = false;
 
     fn width(&self) -> u32 {
         self.dims.width

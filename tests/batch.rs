@@ -280,6 +280,35 @@ fn batcher_refuses_pixels_outside_and_keeps_nothing() {
     assert_eq!(fb.pixel(9, 2).expect("inside")[0], row);
 }
 
+/// Where span inserts do not pay (`Framebuffer::SPAN_INSERTS_PAY`, false only for the
+/// pixel-major HT framebuffer) the batcher holds nothing back: each push is in the framebuffer
+/// at once, out-of-bounds pixels refused as before; everywhere else pushes wait in the batcher.
+#[test]
+fn batcher_passes_fragments_through_where_span_inserts_do_not_pay() {
+    const { assert!(!HybridFramebuffer::<'static, 3>::SPAN_INSERTS_PAY) };
+    const { assert!(HybridSpanFramebuffer::<'static, 3>::SPAN_INSERTS_PAY) };
+    const { assert!(MlabFramebuffer::<'static, 3>::SPAN_INSERTS_PAY) };
+    let mut rng = Rng(78);
+    let (w, h) = (21, 5);
+    let s = stream(&mut rng, w, h, 300);
+    let mut a = vec![Row::EMPTY; HybridFramebuffer::<3>::rows_needed(w, h).expect("size")];
+    let mut fa = HybridFramebuffer::<3>::new_cleared(&mut a, w, h).expect("size");
+    let mut b = vec![Row::EMPTY; HybridFramebuffer::<3>::rows_needed(w, h).expect("size")];
+    let mut fb = HybridFramebuffer::<3>::new_cleared(&mut b, w, h).expect("size");
+    let mut batch = SpanBatcher::new(&mut fb);
+    for &(x, y, item) in &s {
+        push(&mut fa, x, y, item);
+        push_batch(&mut batch, x, y, item);
+        assert_eq!(batch.pending(), 0);
+    }
+    assert!(matches!(
+        batch.insert_row(w, 0, Row::new([1, 2, 3], 100, 1.0)),
+        Err(FramebufferError::OutOfBounds { .. })
+    ));
+    batch.finish().expect("flush");
+    assert_eq!(fb.as_bytes(), fa.as_bytes());
+}
+
 /// Every run-time size: byte-identical to the compile-time type on the same stream.
 #[test]
 fn dyn_framebuffer_matches_the_compile_time_types() {
