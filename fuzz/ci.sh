@@ -13,7 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 SECS="${FUZZ_SECONDS:-15}"
 BACKENDS="${FUZZ_BACKENDS:-default}"
-TARGETS=(mlab_stream hybrid_stream rows_from_bytes lanes_masks)
+TARGETS=(mlab_stream hybrid_stream rows_from_bytes lanes_masks batch_stream)
 
 if ! cargo fuzz --version >/dev/null 2>&1; then
   echo "installing cargo-fuzz"

@@ -39,3 +39,8 @@ fn rows_from_bytes_seeds() {
 fn lanes_masks_seeds() {
     replay("lanes_masks", mlab_fuzz::targets::lanes_masks);
 }
+
+#[test]
+fn batch_stream_seeds() {
+    replay("batch_stream", mlab_fuzz::batch::batch_stream);
+}
