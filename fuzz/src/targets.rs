@@ -1,4 +1,4 @@
-//! The four fuzz targets. Each takes the raw fuzzer bytes; the first byte chooses the
+//! Four of the fuzz targets (the fifth, `batch_stream`, is in [`crate::batch`]). Each takes the raw fuzzer bytes; the first byte chooses the
 //! const parameters (rows per pixel), the rest is decoded by [`Input`]. Every target runs
 //! each input twice, once in each arithmetic of the kernel ([`Paper`], the paper's
 //! rounding and tail, and [`Unbiased`], the default: dithered rounding and the wide
