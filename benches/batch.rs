@@ -125,8 +125,8 @@ impl Framebuffer for Probe<'_> {
     fn height(&self) -> u32 {
         self.fb.height()
     }
-    fn rows_per_pixel(&self) -> usize {
-        1
+    fn layers(&self) -> mlab::Layers {
+        self.fb.layers()
     }
     fn clear(&mut self) {}
     fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), mlab::FramebufferError> {

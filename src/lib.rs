@@ -157,7 +157,6 @@
 
 pub mod arith;
 pub mod batch;
-pub mod dynamic;
 pub mod error;
 pub mod fragment;
 pub mod framebuffer;
@@ -166,23 +165,23 @@ pub mod lanes;
 pub mod mlab;
 pub mod resolve;
 pub mod row;
-pub mod spans;
 mod tail;
 pub mod unorm;
 mod vector;
 
 pub use arith::{Arithmetic, Paper, Unbiased};
 pub use batch::SpanBatcher;
-pub use dynamic::{DynFramebuffer, Layers};
 pub use error::Error;
 pub use fragment::{Fragment, FragmentError};
-pub use framebuffer::{Framebuffer, FramebufferError, HybridFramebuffer, MlabFramebuffer};
+pub use framebuffer::{
+    DynFramebuffer, Framebuffer, FramebufferError, Grid, Ht, HybridFramebuffer, HybridSpanFramebuffer, Layers, Mlab,
+    MlabFramebuffer, PixelMajor, SpanFramebuffer, Spans,
+};
 pub use hybrid::{Hybrid, Tail, TailFormat};
 pub use lanes::{FragmentLanes, InvalidLanes};
 pub use mlab::BlendingArray;
 pub use resolve::{Background, Resolved, resolve_rows, to_rgba8, to_rgba16f};
 pub use row::Row;
-pub use spans::{HybridSpanFramebuffer, SpanFramebuffer};
 
 pub use glam;
 pub use half;

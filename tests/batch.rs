@@ -257,7 +257,10 @@ fn batched_span_storage_equals_pixel_major_bytes() {
         // Dropped without finish: the pending fragments are flushed by drop.
     }
     let mut back = vec![Row::EMPTY; (w * h * 3) as usize];
-    fb.to_pixel_major(&mut back).expect("size");
+    MlabFramebuffer::<3>::new(&mut back, w, h)
+        .expect("size")
+        .copy_from(&fb)
+        .expect("size");
     assert_eq!(back, a);
 }
 
@@ -340,8 +343,8 @@ fn dyn_framebuffer_matches_the_compile_time_types() {
             same(Layers::Hybrid($n), HybridSpanFramebuffer::<$n>::new(&mut st, w, h).expect("size"), &s);
         )*};
     }
-    sizes!(1 2 3 4 6 8);
-    for bad in [0, 5, 7, 9, 100] {
+    sizes!(1 2 3 4 5 6 7 8);
+    for bad in [0, 9, 100] {
         assert_eq!(
             Layers::Mlab(bad).rows_needed(8, 8),
             Err(FramebufferError::UnsupportedLayers { rows: bad })

@@ -1,0 +1,199 @@
+//! Run-time layer counts: [`DynFramebuffer`] is a span [`Grid`] whose method (MLAB or HT)
+//! and size are chosen at run time ([`Layers`]), with the same [`Framebuffer`] operations:
+//! each call is one `match` to the monomorphized grid (per span insert or per resolved span,
+//! not per pixel of a resolve).
+//!
+//! ```
+//! use mlab::{DynFramebuffer, Framebuffer, Layers, Row};
+//! let quality = Layers::Mlab(6); // from a settings menu
+//! let mut storage = vec![Row::EMPTY; quality.rows_needed(64, 16)?];
+//! let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(quality, &mut storage, 64, 16)?;
+//! fb.insert_row(3, 2, Row::new([10, 0, 0], 200, 1.0))?;
+//! assert_eq!(fb.layers(), Layers::Mlab(6));
+//! assert!(Layers::Mlab(9).rows_needed(64, 16).is_err()); // not one of Layers::SIZES
+//! # Ok::<(), mlab::Error>(())
+//! ```
+
+use super::grid::{Grid, Spans};
+use super::pixel::{Ht, Mlab};
+use super::{Framebuffer, FramebufferError};
+use crate::arith::{Arithmetic, Unbiased};
+use crate::lanes::{LANES, ResolvedLanes};
+use crate::resolve::{Background, Resolved};
+use crate::row::Row;
+
+/// A method and its size, chosen at run time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Layers {
+    /// MLAB with this many rows per pixel (`M`).
+    Mlab(usize),
+    /// Hybrid Transparency with this many head rows (`K`; one more slot holds the tail).
+    Hybrid(usize),
+}
+
+impl Layers {
+    /// The sizes offered at run time, for both methods.
+    pub const SIZES: [usize; 8] = [1, 2, 3, 4, 5, 6, 7, 8];
+
+    /// Rows of storage of a [`DynFramebuffer`] of `width x height` pixels, or
+    /// [`FramebufferError::UnsupportedLayers`] for a size not in [`SIZES`](Self::SIZES).
+    pub fn rows_needed(self, width: u32, height: u32) -> Result<usize, FramebufferError> {
+        let rows = match self {
+            Layers::Mlab(m) | Layers::Hybrid(m) => m,
+        };
+        if !Layers::SIZES.contains(&rows) {
+            return Err(FramebufferError::UnsupportedLayers { rows });
+        }
+        Grid::<Mlab<1>, Spans>::rows_needed(width, height)?
+            .checked_mul(self.rows_per_pixel())
+            .ok_or(FramebufferError::SizeOverflow)
+    }
+
+    /// Rows (8-byte slots) per pixel: `M`, or `K + 1`.
+    pub const fn rows_per_pixel(self) -> usize {
+        match self {
+            Layers::Mlab(m) => m,
+            Layers::Hybrid(k) => k + 1,
+        }
+    }
+}
+
+/// The grids a [`DynFramebuffer`] can be, with `$each!` dispatching over all of them.
+macro_rules! variants {
+    ($($v:ident: $p:ident<$n:literal>,)*) => {
+        #[derive(Debug)]
+        enum Inner<'a, A: Arithmetic> {
+            $($v(Grid<'a, $p<$n, A>, Spans>),)*
+        }
+
+        impl<'a, A: Arithmetic> Inner<'a, A> {
+            fn new(layers: Layers, storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+                $(if layers == <$p<$n, A> as super::Pixel>::LAYERS {
+                    return Grid::new(storage, width, height).map(Inner::$v);
+                })*
+                let (Layers::Mlab(rows) | Layers::Hybrid(rows)) = layers;
+                Err(FramebufferError::UnsupportedLayers { rows })
+            }
+        }
+
+        /// `$body` with `$f` bound to the grid inside `$self`, and `$v` (in the second form)
+        /// to the variant's constructor, for results that are grids again.
+        macro_rules! each {
+            ($self:expr, $f:ident => $body:expr) => {
+                match $self { $(Inner::$v($f) => $body,)* }
+            };
+            ($self:expr, $f:ident, $c:ident => $body:expr) => {
+                match $self { $(Inner::$v($f) => { let $c = Inner::$v; $body })* }
+            };
+        }
+    };
+}
+
+variants! {
+    M1: Mlab<1>, M2: Mlab<2>, M3: Mlab<3>, M4: Mlab<4>, M5: Mlab<5>, M6: Mlab<6>, M7: Mlab<7>, M8: Mlab<8>,
+    H1: Ht<1>, H2: Ht<2>, H3: Ht<3>, H4: Ht<4>, H5: Ht<5>, H6: Ht<6>, H7: Ht<7>, H8: Ht<8>,
+}
+
+/// A span framebuffer of a method and size chosen at run time ([`Layers`]), in the
+/// arithmetic `A` ([`Unbiased`] by default).
+///
+/// Name the arithmetic where nothing else fixes it: a type's default parameter does not drive
+/// inference in Rust, so `DynFramebuffer::new(..)` alone is E0283 ("type annotations
+/// needed"). Write `let fb: DynFramebuffer = DynFramebuffer::new(..)`, or
+/// `DynFramebuffer::<Unbiased>::new(..)`, or `DynFramebuffer::<Paper>::new(..)` for the
+/// paper's arithmetic ([`Paper`](crate::Paper)).
+#[derive(Debug)]
+pub struct DynFramebuffer<'a, A: Arithmetic = Unbiased>(Inner<'a, A>);
+
+impl<'a, A: Arithmetic> DynFramebuffer<'a, A> {
+    /// A view over `storage` ([`Layers::rows_needed`] rows exactly); contents are kept, as in
+    /// [`Grid::new`].
+    pub fn new(layers: Layers, storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        Inner::new(layers, storage, width, height).map(DynFramebuffer)
+    }
+
+    /// [`new`](Self::new), then [`clear`](Framebuffer::clear): the way to start a frame.
+    pub fn new_cleared(
+        layers: Layers,
+        storage: &'a mut [Row],
+        width: u32,
+        height: u32,
+    ) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(layers, storage, width, height)?;
+        fb.clear();
+        Ok(fb)
+    }
+}
+
+impl<'a, A: Arithmetic> Framebuffer for DynFramebuffer<'a, A> {
+    type Arith = A;
+    type Band<'b>
+        = DynFramebuffer<'b, A>
+    where
+        Self: 'b;
+
+    fn width(&self) -> u32 {
+        each!(&self.0, f => f.width())
+    }
+
+    fn height(&self) -> u32 {
+        each!(&self.0, f => f.height())
+    }
+
+    fn layers(&self) -> Layers {
+        each!(&self.0, f => f.layers())
+    }
+
+    fn clear(&mut self) {
+        each!(&mut self.0, f => f.clear())
+    }
+
+    #[inline]
+    fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        each!(&mut self.0, f => f.insert_row(x, y, row))
+    }
+
+    #[inline]
+    fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
+        each!(&mut self.0, f => f.insert_span(x, y, rows, mask))
+    }
+
+    fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+        each!(&self.0, f => f.resolve(x, y))
+    }
+
+    fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes> {
+        each!(&self.0, f => f.resolve_span(span, y))
+    }
+
+    fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
+        each!(&self.0, f => f.resolve_span_rgba8(span, y, background))
+    }
+
+    fn resolve_into(&self, out: &mut [glam::Vec4], background: Background) -> Result<(), FramebufferError> {
+        each!(&self.0, f => f.resolve_into(out, background))
+    }
+
+    fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
+        each!(&self.0, f => f.resolve_rgba8(out, background))
+    }
+
+    fn resolve_rgba16f(&self, out: &mut [[half::f16; 4]], background: Background) -> Result<(), FramebufferError> {
+        each!(&self.0, f => f.resolve_rgba16f(out, background))
+    }
+
+    fn as_rows(&self) -> &[Row] {
+        each!(&self.0, f => f.as_rows())
+    }
+
+    fn reborrow(&mut self) -> DynFramebuffer<'_, A> {
+        DynFramebuffer(each!(&mut self.0, f, v => v(f.reborrow())))
+    }
+
+    fn split_lines(self, lines: u32) -> (Self, Self) {
+        each!(self.0, f, v => {
+            let (a, b) = f.split_lines(lines);
+            (DynFramebuffer(v(a)), DynFramebuffer(v(b)))
+        })
+    }
+}

@@ -1,0 +1,420 @@
+//! [`Grid`]: one framebuffer type over caller-owned rows, generic over what a pixel holds
+//! ([`Pixel`]: [`Mlab`](super::Mlab), [`Ht`](super::Ht)) and how pixels are laid out
+//! ([`Arrangement`]: [`PixelMajor`], [`Spans`]). The arrangements own the index maths,
+//! bounds, span rotation and line splits, written once for both kinds; the kinds' leaves
+//! (`pixel.rs`) are the only code that knows `M`, `K` or the tail.
+
+use core::fmt::Debug;
+use core::marker::PhantomData;
+
+use super::pixel::Pixel;
+use super::{Dims, Framebuffer, FramebufferError, write_lines, write_spans};
+use crate::lanes::{LANES, ResolvedLanes};
+use crate::resolve::{Background, Resolved};
+use crate::row::Row;
+
+mod sealed {
+    pub trait Sealed {}
+    impl Sealed for super::PixelMajor {}
+    impl Sealed for super::Spans {}
+}
+
+/// Pixel-major storage: pixel `(x, y)` owns the rows
+/// `[(y * width + x) * R, (y * width + x + 1) * R)`, `R` = [`Pixel::ROWS`] (an HT pixel's last slot holds its tail's bytes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct PixelMajor;
+
+/// 8-pixel spans, layer-major: slot `j` of pixel `(x, y)` is row
+/// `((y * spans + x / 8) * R + j) * 8 + x % 8`, `spans = ceil(width / 8)`; for HT the `K`
+/// head layers come first, then the 8 tails. Lanes past the right edge are padding (kept empty).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Spans;
+
+/// How the pixels of a [`Grid`] are laid out: [`PixelMajor`] or [`Spans`] (sealed). The
+/// hidden items are the storage layer's index maths.
+pub trait Arrangement: sealed::Sealed + Copy + Debug + Default + Send + Sync + 'static {
+    /// Whether pixels are stored in 8-pixel layer-major spans.
+    const SPANS: bool;
+    #[doc(hidden)]
+    fn line_rows(d: Dims, rows: usize) -> Option<usize>;
+    #[doc(hidden)]
+    fn clear<P: Pixel>(rows: &mut [Row]);
+    #[doc(hidden)]
+    fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value>;
+    #[doc(hidden)]
+    fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value);
+    #[doc(hidden)]
+    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row);
+    #[doc(hidden)]
+    fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8);
+    #[doc(hidden)]
+    fn resolve_span<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32) -> Option<ResolvedLanes>;
+    #[doc(hidden)]
+    fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES];
+    #[doc(hidden)]
+    fn resolve_rgba8<P: Pixel>(
+        rows: &[Row],
+        d: Dims,
+        out: &mut [[u8; 4]],
+        bg: Background,
+    ) -> Result<(), FramebufferError>;
+}
+
+/// Unit `i` of `n` rows.
+#[inline(always)]
+fn unit(rows: &[Row], i: usize, n: usize) -> Option<&[Row]> {
+    rows.get(i * n..(i + 1) * n)
+}
+
+/// Unit `i` of `n` rows, mutable.
+#[inline(always)]
+fn unit_mut(rows: &mut [Row], i: usize, n: usize) -> Option<&mut [Row]> {
+    rows.get_mut(i * n..(i + 1) * n)
+}
+
+/// The background's RGBA8 on 8 lanes (a span that does not exist).
+fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
+    [crate::to_rgba8(Resolved::CLEAR.pixel(bg)); LANES]
+}
+
+impl PixelMajor {
+    /// Pixel index of the first pixel of span `span` of line `y` and the pixels of it inside.
+    #[inline(always)]
+    fn span_start(d: Dims, span: u32, y: u32) -> Option<(usize, usize)> {
+        let x = span
+            .checked_mul(LANES as u32)
+            .filter(|&x| x < d.width && y < d.height)?;
+        Some((d.index_unchecked(x, y), d.lanes_inside(x)))
+    }
+}
+
+impl Arrangement for PixelMajor {
+    const SPANS: bool = false;
+
+    fn line_rows(d: Dims, rows: usize) -> Option<usize> {
+        (d.width as usize).checked_mul(rows)
+    }
+
+    fn clear<P: Pixel>(rows: &mut [Row]) {
+        P::pm_clear(rows);
+    }
+
+    fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value> {
+        unit(rows, d.index_unchecked(x, y), P::ROWS).map(P::pm_get)
+    }
+
+    fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value) {
+        if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), P::ROWS) {
+            P::pm_set(px, value);
+        }
+    }
+
+    #[inline(always)]
+    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row) {
+        if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), P::ROWS) {
+            P::pm_insert(px, row);
+        }
+    }
+
+    #[inline(always)]
+    fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8) {
+        let first = d.index_unchecked(x, y);
+        let valid = d.lanes_inside(x);
+        if let Some(px) = rows.get_mut(first * P::ROWS..(first + valid) * P::ROWS) {
+            P::pm_insert_span(px, span, mask);
+        }
+    }
+
+    #[inline(always)]
+    fn resolve_span<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32) -> Option<ResolvedLanes> {
+        let (first, valid) = Self::span_start(d, span, y)?;
+        rows.get(first * P::ROWS..(first + valid) * P::ROWS)
+            .map(P::pm_resolve_span)
+    }
+
+    #[inline(always)]
+    fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES] {
+        match Self::span_start(d, span, y)
+            .and_then(|(first, valid)| rows.get(first * P::ROWS..(first + valid) * P::ROWS))
+        {
+            Some(px) => P::pm_resolve_span_rgba8(px, bg),
+            None => clear_rgba8(bg),
+        }
+    }
+
+    /// Line by line, the whole spans straight from the line's rows (no per-span bounds
+    /// check, the lanes resolve inlined), the partial last span once.
+    fn resolve_rgba8<P: Pixel>(
+        rows: &[Row],
+        d: Dims,
+        out: &mut [[u8; 4]],
+        bg: Background,
+    ) -> Result<(), FramebufferError> {
+        if !P::PIXEL_MAJOR_LINE_LOOP {
+            return write_spans(d, out, |s, y| Self::resolve_span_rgba8::<P>(rows, d, s, y, bg));
+        }
+        let mut lines = rows.chunks_exact((d.width as usize * P::ROWS).max(1));
+        write_lines(
+            d,
+            out,
+            |spans| P::pm_resolve_line_rgba8(lines.next().unwrap_or(&[]), spans, bg),
+            |s, y| Self::resolve_span_rgba8::<P>(rows, d, s, y, bg),
+        )
+    }
+}
+
+impl Arrangement for Spans {
+    const SPANS: bool = true;
+
+    fn line_rows(d: Dims, rows: usize) -> Option<usize> {
+        d.spans.checked_mul(LANES)?.checked_mul(rows)
+    }
+
+    fn clear<P: Pixel>(rows: &mut [Row]) {
+        for span in rows.chunks_exact_mut(LANES * P::ROWS) {
+            P::span_clear(span);
+        }
+    }
+
+    fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value> {
+        let (i, lane) = d.span_lane(x, y);
+        unit(rows, i, LANES * P::ROWS).map(|s| P::span_get(s, lane))
+    }
+
+    fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value) {
+        let (i, lane) = d.span_lane(x, y);
+        if let Some(s) = unit_mut(rows, i, LANES * P::ROWS) {
+            P::span_set(s, lane, value);
+        }
+    }
+
+    #[inline(always)]
+    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row) {
+        let (i, lane) = d.span_lane(x, y);
+        if let Some(s) = unit_mut(rows, i, LANES * P::ROWS) {
+            P::span_insert(s, lane, row);
+        }
+    }
+
+    /// A span at `x` not a multiple of 8 touches two stored spans: lane `i` lands on lane
+    /// `(i + x % 8) % 8`, of the first if `i + x % 8 < 8`, of the next one otherwise.
+    #[inline(always)]
+    fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8) {
+        let (i, shift) = d.span_lane(x, y);
+        let wide = (mask as u16) << shift;
+        let mut span = *span;
+        if shift != 0 {
+            span.rotate_right(shift);
+        }
+        for (i, m) in [(i, wide as u8), (i + 1, (wide >> 8) as u8)] {
+            if m != 0
+                && let Some(s) = unit_mut(rows, i, LANES * P::ROWS)
+            {
+                P::span_insert_span(s, &span, m);
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn resolve_span<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32) -> Option<ResolvedLanes> {
+        d.span_index(span, y)
+            .and_then(|i| unit(rows, i, LANES * P::ROWS))
+            .map(P::span_resolve)
+    }
+
+    #[inline(always)]
+    fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES] {
+        match d.span_index(span, y).and_then(|i| unit(rows, i, LANES * P::ROWS)) {
+            Some(s) => P::span_resolve_rgba8(s, bg),
+            None => clear_rgba8(bg),
+        }
+    }
+
+    fn resolve_rgba8<P: Pixel>(
+        rows: &[Row],
+        d: Dims,
+        out: &mut [[u8; 4]],
+        bg: Background,
+    ) -> Result<(), FramebufferError> {
+        write_spans(d, out, |s, y| Self::resolve_span_rgba8::<P>(rows, d, s, y, bg))
+    }
+}
+
+/// A framebuffer over caller-owned rows: `width x height` pixels of the kind `P` ([`Mlab`](super::Mlab) or
+/// [`Ht`](super::Ht), with their size and arithmetic) in the arrangement `L` ([`PixelMajor`] or
+/// [`Spans`]). Usually named by its aliases: [`MlabFramebuffer`](super::MlabFramebuffer),
+/// [`HybridFramebuffer`](super::HybridFramebuffer), [`SpanFramebuffer`](super::SpanFramebuffer),
+/// [`HybridSpanFramebuffer`](super::HybridSpanFramebuffer). Its operations are those of
+/// [`Framebuffer`]; the storage layouts are specified in `docs/layout.md`.
+///
+/// ```
+/// use mlab::{Framebuffer, HybridFramebuffer, HybridSpanFramebuffer, Row};
+/// let mut a = vec![Row::EMPTY; HybridSpanFramebuffer::<3>::rows_needed(10, 2)?];
+/// let mut spans = HybridSpanFramebuffer::<3>::new_cleared(&mut a, 10, 2)?;
+/// spans.insert_row(9, 1, Row::new([10, 20, 30], 128, 2.0))?;
+/// // The same pixels, pixel-major (to upload, or to read pixel by pixel).
+/// let mut b = vec![Row::EMPTY; HybridFramebuffer::<3>::rows_needed(10, 2)?];
+/// let mut pixels = HybridFramebuffer::<3>::new(&mut b, 10, 2)?;
+/// pixels.copy_from(&spans)?;
+/// assert_eq!(pixels.pixel(9, 1)?, spans.pixel(9, 1)?);
+/// assert_eq!(pixels.pixel(9, 1)?.0[0], Row::new([10, 20, 30], 128, 2.0));
+/// # Ok::<(), mlab::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct Grid<'a, P: Pixel, L: Arrangement> {
+    rows: &'a mut [Row],
+    dims: Dims,
+    kind: PhantomData<(P, L)>,
+}
+
+impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
+    /// Rows of storage for `width x height` pixels: `width * height * R` pixel-major,
+    /// `ceil(width / 8) * 8 * height * R` in spans (`R` = [`Pixel::ROWS`]).
+    pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
+        let d = Dims::new(width, height);
+        L::line_rows(d, P::ROWS)
+            .and_then(|r| r.checked_mul(height as usize))
+            .ok_or(FramebufferError::SizeOverflow)
+    }
+
+    /// A view over `storage`, which must hold exactly [`rows_needed`](Self::rows_needed)
+    /// rows. The contents are kept (a previous frame, a GPU read-back). **Storage filled with
+    /// [`Row::EMPTY`] is not a cleared HT framebuffer** (an empty row's bytes are not an empty
+    /// tail): start a frame with [`new_cleared`](Self::new_cleared).
+    pub fn new(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let expected = Self::rows_needed(width, height)?;
+        if storage.len() != expected {
+            return Err(FramebufferError::StorageLength {
+                expected,
+                actual: storage.len(),
+            });
+        }
+        Ok(Grid {
+            rows: storage,
+            dims: Dims::new(width, height),
+            kind: PhantomData,
+        })
+    }
+
+    /// [`new`](Self::new), then [`clear`](Framebuffer::clear): the way to start a frame.
+    pub fn new_cleared(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
+        let mut fb = Self::new(storage, width, height)?;
+        fb.clear();
+        Ok(fb)
+    }
+
+    /// The contents of pixel `(x, y)`: `[Row; M]` for MLAB, `([Row; K], tail)` for HT.
+    pub fn pixel(&self, x: u32, y: u32) -> Result<P::Value, FramebufferError> {
+        self.dims.check(x, y)?;
+        L::get::<P>(self.rows, self.dims, x, y).ok_or(self.dims.out_of_bounds(x, y))
+    }
+
+    /// Overwrite every pixel with those of `other` (same kind and size, any arrangement):
+    /// between pixel-major and spans, losslessly.
+    pub fn copy_from<L2: Arrangement>(&mut self, other: &Grid<'_, P, L2>) -> Result<(), FramebufferError> {
+        if (other.dims.width, other.dims.height) != (self.dims.width, self.dims.height) {
+            return Err(FramebufferError::SizeMismatch);
+        }
+        for y in 0..self.dims.height {
+            for x in 0..self.dims.width {
+                let v = other.pixel(x, y)?;
+                L::set::<P>(self.rows, self.dims, x, y, v);
+            }
+        }
+        Ok(())
+    }
+
+    /// Pixels whose HT tail has a field at its maximum (its sums no longer grow); 0 for MLAB.
+    pub fn saturated_pixels(&self) -> usize {
+        let d = self.dims;
+        (0..d.height)
+            .flat_map(|y| (0..d.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| L::get::<P>(self.rows, d, x, y).is_some_and(|v| P::saturated(&v)))
+            .count()
+    }
+}
+
+impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
+    type Arith = P::Arith;
+    type Band<'b>
+        = Grid<'b, P, L>
+    where
+        Self: 'b;
+
+    const SPAN_INSERTS_PAY: bool = L::SPANS || P::PIXEL_MAJOR_SPAN_INSERTS_PAY;
+
+    fn width(&self) -> u32 {
+        self.dims.width
+    }
+
+    fn height(&self) -> u32 {
+        self.dims.height
+    }
+
+    fn layers(&self) -> super::Layers {
+        P::LAYERS
+    }
+
+    fn clear(&mut self) {
+        L::clear::<P>(self.rows);
+    }
+
+    #[inline]
+    fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
+        self.dims.check(x, y)?;
+        L::insert::<P>(self.rows, self.dims, x, y, row);
+        Ok(())
+    }
+
+    #[inline]
+    fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
+        self.dims.check_span(x, y, mask)?;
+        if mask != 0 {
+            L::insert_span::<P>(self.rows, self.dims, x, y, rows, mask);
+        }
+        Ok(())
+    }
+
+    fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
+        self.pixel(x, y).map(|v| P::resolve(&v))
+    }
+
+    #[inline]
+    fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes> {
+        L::resolve_span::<P>(self.rows, self.dims, span, y)
+    }
+
+    #[inline]
+    fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
+        L::resolve_span_rgba8::<P>(self.rows, self.dims, span, y, background)
+    }
+
+    fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
+        L::resolve_rgba8::<P>(self.rows, self.dims, out, background)
+    }
+
+    fn as_rows(&self) -> &[Row] {
+        self.rows
+    }
+
+    fn reborrow(&mut self) -> Grid<'_, P, L> {
+        Grid {
+            rows: self.rows,
+            dims: self.dims,
+            kind: PhantomData,
+        }
+    }
+
+    fn split_lines(self, lines: u32) -> (Self, Self) {
+        let lines = lines.min(self.dims.height);
+        let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
+        let at = (lines as usize * line_rows).min(self.rows.len());
+        let (a, b) = self.rows.split_at_mut(at);
+        let band = |rows, height| Grid {
+            rows,
+            dims: Dims { height, ..self.dims },
+            kind: PhantomData,
+        };
+        (band(a, lines), band(b, self.dims.height - lines))
+    }
+}

@@ -1,0 +1,467 @@
+//! Framebuffers over borrowed storage: no allocation, every size and coordinate checked,
+//! errors instead of panics. One type, [`Grid`], generic over what a pixel holds ([`Mlab`],
+//! [`Ht`]) and how pixels are laid out ([`PixelMajor`], [`Spans`]); one interface, the
+//! [`Framebuffer`] trait, which [`DynFramebuffer`] (method and size chosen at run time) shares.
+//!
+//! | alias | is | pixel | arrangement |
+//! |---|---|---|---|
+//! | [`MlabFramebuffer<M>`] | `Grid<Mlab<M>, PixelMajor>` | MLAB, `M` rows | `[Row; M]` per pixel, row-major |
+//! | [`HybridFramebuffer<K>`] | `Grid<Ht<K>, PixelMajor>` | HT, `K` head rows + tail | `K` rows then the tail, per pixel |
+//! | [`SpanFramebuffer<M>`] | `Grid<Mlab<M>, Spans>` | MLAB | 8-pixel spans, layer-major |
+//! | [`HybridSpanFramebuffer<K>`] | `Grid<Ht<K>, Spans>` | HT | 8-pixel spans, layer-major |
+//! | [`DynFramebuffer`] | one of the span grids | MLAB or HT, [`Layers`] at run time | 8-pixel spans |
+//!
+//! Every alias takes the arithmetic as its last parameter (`SpanFramebuffer<4, Paper>`;
+//! [`Unbiased`] by default). [`Framebuffer`] gives pixel inserts, span inserts (8 pixels and
+//! a coverage mask, on both arrangements), resolves into f32, premultiplied RGBA, RGBA8 and
+//! RGBA16F, bands for threads, and byte/word views for a GPU upload: bring it into scope
+//! (`use mlab::Framebuffer;`). [`Grid::pixel`] reads a pixel, [`Grid::copy_from`] converts
+//! between arrangements. Storage layouts: `docs/layout.md`. "Row" is always the paper's
+//! 8-byte layer of a pixel, never a line of the image: lines are `y`.
+//!
+//! Which one: pixel-major suits a renderer that inserts one pixel at a time in random order
+//! and reads pixels back one by one; spans are faster for span inserts and resolves (no
+//! transpose around the lanes), and are what the [`SpanBatcher`](crate::SpanBatcher) feeds
+//! best (`docs/performance.md`).
+//!
+//! ```
+//! use mlab::glam::Vec3;
+//! use mlab::{Background, Fragment, Framebuffer, MlabFramebuffer, Row};
+//! let mut storage = vec![Row::EMPTY; 4 * 2 * 2]; // 4x2 pixels, 2 rows each
+//! let mut fb = MlabFramebuffer::<2>::new(&mut storage, 4, 2)?;
+//! fb.insert(1, 1, &Fragment::straight(Vec3::X, 1.0, 5.0)?)?;
+//! assert!(fb.insert(4, 0, &Fragment::straight(Vec3::X, 1.0, 5.0)?).is_err());
+//! let mut out = [[0u8; 4]; 8];
+//! fb.resolve_rgba8(&mut out, Background::Opaque(Vec3::ZERO))?;
+//! assert_eq!(out[5], [255, 0, 0, 255]);
+//! assert_eq!(out[0], [0, 0, 0, 255]);
+//! # Ok::<(), mlab::Error>(())
+//! ```
+
+mod dynamic;
+mod grid;
+mod pixel;
+
+use glam::Vec4;
+use half::f16;
+
+use crate::arith::{Arithmetic, Unbiased};
+use crate::fragment::Fragment;
+use crate::lanes::{FragmentLanes, InvalidLanes, LANES, ResolvedLanes};
+use crate::resolve::{Background, Resolved, to_rgba16f};
+use crate::row::Row;
+
+pub use dynamic::{DynFramebuffer, Layers};
+pub use grid::{Arrangement, Grid, PixelMajor, Spans};
+pub use pixel::{Ht, Mlab, Pixel};
+
+/// MLAB, `M` rows per pixel, pixel-major.
+pub type MlabFramebuffer<'a, const M: usize, A = Unbiased> = Grid<'a, Mlab<M, A>, PixelMajor>;
+/// Hybrid Transparency, `K` head rows and a tail per pixel, pixel-major.
+pub type HybridFramebuffer<'a, const K: usize, A = Unbiased> = Grid<'a, Ht<K, A>, PixelMajor>;
+/// MLAB, `M` rows per pixel, in 8-pixel layer-major spans.
+pub type SpanFramebuffer<'a, const M: usize, A = Unbiased> = Grid<'a, Mlab<M, A>, Spans>;
+/// Hybrid Transparency, `K` head rows and a tail per pixel, in 8-pixel spans.
+pub type HybridSpanFramebuffer<'a, const K: usize, A = Unbiased> = Grid<'a, Ht<K, A>, Spans>;
+
+/// Why a framebuffer operation was refused. Nothing was changed when one is returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum FramebufferError {
+    /// The storage slice does not hold exactly `width * height * rows_per_pixel` rows.
+    StorageLength {
+        /// Rows required.
+        expected: usize,
+        /// Rows given.
+        actual: usize,
+    },
+    /// `width * height * rows_per_pixel` does not fit in `usize`.
+    SizeOverflow,
+    /// A coordinate lies outside the framebuffer.
+    OutOfBounds {
+        /// Column asked for.
+        x: u32,
+        /// Line asked for.
+        y: u32,
+        /// Framebuffer width.
+        width: u32,
+        /// Framebuffer height.
+        height: u32,
+    },
+    /// An output slice does not hold exactly `width * height` pixels.
+    OutputLength {
+        /// Pixels required.
+        expected: usize,
+        /// Pixels given.
+        actual: usize,
+    },
+    /// A run-time layer count that [`DynFramebuffer`] does not offer (see
+    /// [`Layers::SIZES`]).
+    UnsupportedLayers {
+        /// Rows (MLAB) or head rows (HT) asked for.
+        rows: usize,
+    },
+    /// Two framebuffers of different sizes ([`Grid::copy_from`]).
+    SizeMismatch,
+}
+
+impl core::fmt::Display for FramebufferError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            FramebufferError::StorageLength { expected, actual } => {
+                write!(f, "framebuffer storage holds {actual} rows, expected {expected}")
+            }
+            FramebufferError::SizeOverflow => f.write_str("framebuffer size overflows usize"),
+            FramebufferError::OutOfBounds { x, y, width, height } => {
+                write!(f, "pixel ({x}, {y}) is outside the {width}x{height} framebuffer")
+            }
+            FramebufferError::OutputLength { expected, actual } => {
+                write!(f, "output holds {actual} pixels, expected {expected}")
+            }
+            FramebufferError::UnsupportedLayers { rows } => {
+                write!(f, "{rows} rows per pixel is not one of the run-time sizes 1 to 8")
+            }
+            FramebufferError::SizeMismatch => f.write_str("framebuffers of different sizes"),
+        }
+    }
+}
+
+impl core::error::Error for FramebufferError {}
+
+/// Width, height and spans per line, with the checks shared by every framebuffer.
+#[doc(hidden)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Dims {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    /// 8-pixel spans per line: `ceil(width / 8)`.
+    pub(crate) spans: usize,
+}
+
+impl Dims {
+    pub(crate) fn new(width: u32, height: u32) -> Dims {
+        Dims {
+            width,
+            height,
+            spans: (width as usize).div_ceil(LANES),
+        }
+    }
+
+    /// The error for pixel `(x, y)` outside these dimensions.
+    pub(crate) fn out_of_bounds(self, x: u32, y: u32) -> FramebufferError {
+        FramebufferError::OutOfBounds {
+            x,
+            y,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
+    /// Check that pixel `(x, y)` is inside.
+    #[inline(always)]
+    pub(crate) fn check(self, x: u32, y: u32) -> Result<(), FramebufferError> {
+        if x >= self.width || y >= self.height {
+            return Err(self.out_of_bounds(x, y));
+        }
+        Ok(())
+    }
+
+    /// Pixel index of `(x, y)` (checked before).
+    #[inline(always)]
+    pub(crate) fn index_unchecked(self, x: u32, y: u32) -> usize {
+        y as usize * self.width as usize + x as usize
+    }
+
+    /// Stored span and lane of pixel `(x, y)` (checked before).
+    #[inline(always)]
+    pub(crate) fn span_lane(self, x: u32, y: u32) -> (usize, usize) {
+        (y as usize * self.spans + x as usize / LANES, x as usize % LANES)
+    }
+
+    /// Stored span index of span `span` of line `y`, if both are inside.
+    #[inline(always)]
+    pub(crate) fn span_index(self, span: u32, y: u32) -> Option<usize> {
+        ((span as usize) < self.spans && y < self.height).then(|| y as usize * self.spans + span as usize)
+    }
+
+    /// Pixels of a span from column `x` that lie inside the line.
+    #[inline(always)]
+    pub(crate) fn lanes_inside(self, x: u32) -> usize {
+        (self.width.saturating_sub(x) as usize).min(LANES)
+    }
+
+    /// Check a span operation at `(x, y)` with `mask`: every lane that is on lies inside (a
+    /// zero mask touches no pixel and may lie anywhere on a valid line).
+    #[inline(always)]
+    pub(crate) fn check_span(self, x: u32, y: u32, mask: u8) -> Result<(), FramebufferError> {
+        if y >= self.height {
+            return Err(self.out_of_bounds(x, y));
+        }
+        if mask == 0 {
+            return Ok(());
+        }
+        let last = x as u64 + 7 - mask.leading_zeros() as u64;
+        if last >= self.width as u64 {
+            return Err(self.out_of_bounds(last.min(u32::MAX as u64) as u32, y));
+        }
+        Ok(())
+    }
+
+    /// Check an output slice length: exactly `width * height` pixels.
+    pub(crate) fn check_output(self, len: usize) -> Result<(), FramebufferError> {
+        let expected = (self.width as usize)
+            .checked_mul(self.height as usize)
+            .ok_or(FramebufferError::SizeOverflow)?;
+        if len != expected {
+            return Err(FramebufferError::OutputLength { expected, actual: len });
+        }
+        Ok(())
+    }
+}
+
+/// Write the 8 lanes of each span (`span(span_index_in_line, y)`) into a row-major output
+/// of `width * height` pixels, dropping lanes past the right edge.
+pub(crate) fn write_spans<T: Copy>(
+    d: Dims,
+    out: &mut [T],
+    span: impl Fn(u32, u32) -> [T; LANES],
+) -> Result<(), FramebufferError> {
+    let width = d.width;
+    d.check_output(out.len())?;
+    if width == 0 {
+        return Ok(());
+    }
+    for (y, line) in out.chunks_exact_mut(width as usize).enumerate() {
+        // Whole spans as arrays: a fixed-size store each. (A copy of `o.len()` elements, the
+        // same for every chunk, compiled to a call to `memmove` per span: 16-22 % of an RGBA8
+        // resolve at M = 1.) The loop of `write_lines`, kept apart: through its closure the
+        // span resolves ran 2 more instructions per span (callgrind, MLAB spans).
+        let (whole, rest) = line.as_chunks_mut::<LANES>();
+        for (sx, o) in whole.iter_mut().enumerate() {
+            *o = span(sx as u32, y as u32);
+        }
+        if !rest.is_empty() {
+            let px = span(whole.len() as u32, y as u32);
+            rest.copy_from_slice(&px[..rest.len()]);
+        }
+    }
+    Ok(())
+}
+
+/// [`write_spans`] with the whole spans of each line written by `whole(y, spans)` (a
+/// pixel-major framebuffer's own loop over its storage, without a bounds check per span),
+/// the partial last span by `span`.
+pub(crate) fn write_lines<T: Copy>(
+    d: Dims,
+    out: &mut [T],
+    mut whole: impl FnMut(&mut [[T; LANES]]),
+    span: impl Fn(u32, u32) -> [T; LANES],
+) -> Result<(), FramebufferError> {
+    let width = d.width;
+    d.check_output(out.len())?;
+    if width == 0 {
+        return Ok(());
+    }
+    for (y, line) in out.chunks_exact_mut(width as usize).enumerate() {
+        let (spans, rest) = line.as_chunks_mut::<LANES>();
+        whole(spans);
+        if !rest.is_empty() {
+            let px = span(spans.len() as u32, y as u32);
+            rest.copy_from_slice(&px[..rest.len()]);
+        }
+    }
+    Ok(())
+}
+
+/// Resolved lanes of nothing (lanes past the edge, or spans that cannot exist).
+const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
+    color: [[0.0; LANES]; 3],
+    transmittance: [1.0; LANES],
+};
+
+/// What every framebuffer offers, whatever its method (MLAB or HT), its arrangement
+/// (pixel-major or spans), its size (compile time or [run time](crate::DynFramebuffer)) and
+/// its arithmetic.
+///
+/// Coordinates: `x` is the column, `y` the line, `(0, 0)` the first pixel of the storage.
+/// Span operations take the pixel `(x, y)` of lane 0 and a coverage mask (`u8`, bit `i` =
+/// lane `i` = pixel `(x + i, y)`); `x` need not be a multiple of 8, and a lane outside the
+/// framebuffer must be off (otherwise [`FramebufferError::OutOfBounds`] and nothing
+/// changes). Every operation either succeeds or changes nothing.
+///
+/// Colors: every input is **linear** (not sRGB), premultiplied unless a method says
+/// straight; every output is linear too. [`resolve_rgba8`](Self::resolve_rgba8) writes
+/// linear unorm8 (`floor(v * 255 + 0.5)`), not sRGB-encoded bytes: upload it to an
+/// `Rgba8Unorm` texture (not `Rgba8UnormSrgb`), or encode it yourself from
+/// [`resolve_into`](Self::resolve_into) for display.
+pub trait Framebuffer {
+    /// The arithmetic of the merge, of quantization and of the HT tail.
+    type Arith: Arithmetic;
+    /// A band of lines of this framebuffer (the same type over a shorter borrow).
+    type Band<'b>: Framebuffer<Arith = Self::Arith>
+    where
+        Self: 'b;
+
+    /// Whether fragments gathered into span inserts go in faster than one pixel at a time
+    /// (measured, `docs/performance.md`): true everywhere but the pixel-major
+    /// [`HybridFramebuffer`], whose span insert gathers and scatters the pixels around an
+    /// insert that has no merge to share (HT `K = 3`: 0.75-0.88x per-pixel speed through a
+    /// [`SpanBatcher`](crate::SpanBatcher)). A [`SpanBatcher`](crate::SpanBatcher) over a
+    /// framebuffer where this is false passes each fragment straight to
+    /// [`insert`](Self::insert) (nothing pending, the same bytes).
+    const SPAN_INSERTS_PAY: bool = true;
+
+    /// Width in pixels.
+    fn width(&self) -> u32;
+
+    /// Height in pixels (lines).
+    fn height(&self) -> u32;
+
+    /// The method and size ([`Layers::rows_per_pixel`]: row-sized slots per pixel).
+    fn layers(&self) -> Layers;
+
+    /// Reset every pixel to empty (empty rows, empty tails; padding lanes included).
+    fn clear(&mut self);
+
+    /// Insert a quantized row at `(x, y)` (Listing 1 or 2).
+    fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError>;
+
+    /// Insert one row per lane at pixels `(x + i, y)` for the lanes set in `mask` (Listing 1
+    /// or 2 in lanes), byte-identical to [`insert_row`](Self::insert_row) on each lane.
+    fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError>;
+
+    /// Resolve one pixel (Eq. 5, or head and tail for HT).
+    fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError>;
+
+    /// Resolve the 8 pixels `(8 * span + i, y)`, lanes past the right edge clear
+    /// ([`Resolved::CLEAR`]); lane `i` is [`resolve`](Self::resolve) of its pixel bit for bit.
+    /// `None` when the span or the line is outside.
+    fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes>;
+
+    /// The storage as rows (pixel-major or spans, as the type says; HT tail slots hold
+    /// tail bytes).
+    fn as_rows(&self) -> &[Row];
+
+    /// This framebuffer over a shorter borrow (all lines).
+    fn reborrow(&mut self) -> Self::Band<'_>;
+
+    /// Split into the first `lines` lines and the rest (empty when `lines >= height`).
+    fn split_lines(self, lines: u32) -> (Self, Self)
+    where
+        Self: Sized;
+
+    /// Insert a fragment at `(x, y)`, quantized by [`Self::Arith`](Arithmetic::quantize).
+    #[inline]
+    fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
+        self.insert_row(x, y, <Self::Arith as Arithmetic>::quantize(fragment))
+    }
+
+    /// Validate, quantize and insert one fragment per lane, premultiplied color
+    /// ([`FragmentLanes::quantize_with`]); returns the lanes that were on but invalid (left
+    /// untouched). Coordinates are checked first, for every lane that is on.
+    #[inline]
+    fn insert_span_fragments(
+        &mut self,
+        x: u32,
+        y: u32,
+        fragments: &FragmentLanes,
+        mask: u8,
+    ) -> Result<InvalidLanes, FramebufferError> {
+        Dims::new(self.width(), self.height()).check_span(x, y, mask)?;
+        let q = fragments.quantize_with::<Self::Arith>(mask);
+        self.insert_span(x, y, &q.rows, q.valid)?;
+        Ok(InvalidLanes(q.invalid))
+    }
+
+    /// [`insert_span_fragments`](Self::insert_span_fragments) with straight (not
+    /// premultiplied) color: each channel is multiplied by alpha first
+    /// ([`FragmentLanes::quantize_straight_with`]).
+    #[inline]
+    fn insert_span_straight(
+        &mut self,
+        x: u32,
+        y: u32,
+        fragments: &FragmentLanes,
+        mask: u8,
+    ) -> Result<InvalidLanes, FramebufferError> {
+        Dims::new(self.width(), self.height()).check_span(x, y, mask)?;
+        let q = fragments.quantize_straight_with::<Self::Arith>(mask);
+        self.insert_span(x, y, &q.rows, q.valid)?;
+        Ok(InvalidLanes(q.invalid))
+    }
+
+    /// Resolve the 8 pixels of a span straight to RGBA8 (the span framebuffers keep the
+    /// values in registers); lanes past the edge are the background's.
+    #[inline]
+    fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
+        self.resolve_span(span, y).unwrap_or(CLEAR_LANES).rgba8(background)
+    }
+
+    /// Resolve every pixel into f32 RGBA, row-major (`width * height`): opaque over a
+    /// background, or premultiplied ([`Resolved::pixel`]). Linear.
+    fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
+        write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
+            self.resolve_span(s, y).unwrap_or(CLEAR_LANES).pixels(background)
+        })
+    }
+
+    /// Resolve every pixel into RGBA8 ([`to_rgba8`]: linear unorm8, not sRGB), row-major.
+    fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
+        write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
+            self.resolve_span_rgba8(s, y, background)
+        })
+    }
+
+    /// Resolve every pixel into RGBA16F ([`to_rgba16f`], linear), row-major.
+    fn resolve_rgba16f(&self, out: &mut [[f16; 4]], background: Background) -> Result<(), FramebufferError> {
+        write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
+            self.resolve_span(s, y)
+                .unwrap_or(CLEAR_LANES)
+                .pixels(background)
+                .map(to_rgba16f)
+        })
+    }
+
+    /// Split into bands of `lines` lines (the last one may be shorter), each a framebuffer
+    /// of its own over its part of the storage, so that threads can own them. Band `b`
+    /// covers lines `b * lines ..`; coordinates inside a band are relative to its first
+    /// line. `lines == 0`, or an empty framebuffer, yields no band.
+    fn bands_mut(&mut self, lines: u32) -> Bands<Self::Band<'_>> {
+        let none = lines == 0 || self.width() == 0 || self.height() == 0;
+        Bands {
+            rest: if none { None } else { Some(self.reborrow()) },
+            lines,
+        }
+    }
+
+    /// The storage as bytes (8 per row; layout in [`Row`] and [`Tail`](crate::Tail)).
+    fn as_bytes(&self) -> &[u8] {
+        bytemuck::cast_slice(self.as_rows())
+    }
+
+    /// The storage as native-endian `u32` words, two per row (`RG32Uint` texels). On
+    /// little-endian hosts these are the words of [`Row::words`].
+    fn as_words(&self) -> &[u32] {
+        bytemuck::cast_slice(self.as_rows())
+    }
+}
+
+/// The bands of a framebuffer ([`Framebuffer::bands_mut`]).
+#[derive(Debug)]
+pub struct Bands<F> {
+    rest: Option<F>,
+    lines: u32,
+}
+
+impl<F: Framebuffer> Iterator for Bands<F> {
+    type Item = F;
+    fn next(&mut self) -> Option<F> {
+        let fb = self.rest.take()?;
+        if fb.height() <= self.lines {
+            return Some(fb);
+        }
+        let (band, rest) = fb.split_lines(self.lines);
+        self.rest = Some(rest);
+        Some(band)
+    }
+}

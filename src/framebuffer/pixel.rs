@@ -1,0 +1,488 @@
+//! What a pixel holds: [`Mlab`] (`M` rows) or [`Ht`] (`K` head rows and a tail), each in an
+//! arithmetic. The only code of the storage layer that names `M`, `K` or the tail type: every
+//! per-kind fast path is a leaf here, called by the two arrangements
+//! ([`PixelMajor`](super::PixelMajor), [`Spans`](super::Spans)) with the rows of one unit of
+//! storage:
+//!
+//! - pixel-major leaves (`pm_*`) get one pixel's rows, or the rows of 1 to 8 consecutive
+//!   pixels of a line (a span; fewer than 8 at the right edge);
+//! - span leaves (`span_*`) get one stored 8-pixel span, layer-major (`8 * ROWS` rows).
+
+use core::fmt::Debug;
+use core::marker::PhantomData;
+
+use super::Layers;
+use crate::arith::{Arithmetic, Unbiased};
+use crate::hybrid::{self, TailFormat};
+use crate::lanes::{self, LANES, ResolvedLanes};
+use crate::mlab;
+use crate::resolve::{Background, Resolved, resolve_rows};
+use crate::row::Row;
+
+mod sealed {
+    pub trait Sealed {}
+    impl<const M: usize, A: crate::Arithmetic> Sealed for super::Mlab<M, A> {}
+    impl<const K: usize, A: crate::Arithmetic> Sealed for super::Ht<K, A> {}
+}
+
+/// MLAB with `M` rows per pixel in the arithmetic `A`: a [`Pixel`] kind of a
+/// [`Grid`](super::Grid).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Mlab<const M: usize, A: Arithmetic = Unbiased>(PhantomData<A>);
+
+/// Hybrid Transparency with `K` head rows and one tail (`K + 1` row-sized slots per pixel)
+/// in the arithmetic `A`, which picks the tail format: a [`Pixel`] kind of a
+/// [`Grid`](super::Grid).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Ht<const K: usize, A: Arithmetic = Unbiased>(PhantomData<A>);
+
+/// What one pixel of a [`Grid`](super::Grid) holds: [`Mlab`] or [`Ht`] (sealed). The
+/// hidden items are the storage layer's leaves.
+pub trait Pixel: sealed::Sealed + Copy + Debug + Send + Sync + 'static {
+    /// The arithmetic of the merge, of quantization and of the tail.
+    type Arith: Arithmetic;
+    /// One pixel's contents, as [`Grid::pixel`](super::Grid::pixel) returns them:
+    /// `[Row; M]`, or `([Row; K], tail)`.
+    type Value: Copy + Debug + PartialEq;
+    /// Row-sized (8-byte) slots per pixel: `M`, or `K + 1`.
+    const ROWS: usize;
+    /// The method and size.
+    const LAYERS: Layers;
+    /// Whether span inserts into pixel-major storage beat pixel inserts (measured,
+    /// `docs/performance.md`): not for HT, whose gather/insert/scatter has no merge to share.
+    #[doc(hidden)]
+    const PIXEL_MAJOR_SPAN_INSERTS_PAY: bool;
+    /// Whether the pixel-major RGBA8 resolve walks whole spans in the line loop (see the
+    /// HT implementation for where it does not).
+    #[doc(hidden)]
+    const PIXEL_MAJOR_LINE_LOOP: bool = true;
+
+    /// Resolve one pixel (Eq. 5, or head and tail).
+    fn resolve(value: &Self::Value) -> Resolved;
+    /// Whether the pixel's HT tail has a field at its maximum (never for MLAB).
+    fn saturated(value: &Self::Value) -> bool;
+
+    #[doc(hidden)]
+    fn pm_clear(rows: &mut [Row]);
+    #[doc(hidden)]
+    fn pm_get(px: &[Row]) -> Self::Value;
+    #[doc(hidden)]
+    fn pm_set(px: &mut [Row], value: Self::Value);
+    #[doc(hidden)]
+    fn pm_insert(px: &mut [Row], row: Row);
+    #[doc(hidden)]
+    fn pm_insert_span(px: &mut [Row], rows: &[Row; LANES], mask: u8);
+    #[doc(hidden)]
+    fn pm_resolve_span(px: &[Row]) -> ResolvedLanes;
+    #[doc(hidden)]
+    fn pm_resolve_span_rgba8(px: &[Row], background: Background) -> [[u8; 4]; LANES];
+    /// The whole spans of one line (`line`: its pixels' rows), into `out`.
+    #[doc(hidden)]
+    fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background);
+
+    #[doc(hidden)]
+    fn span_clear(span: &mut [Row]);
+    #[doc(hidden)]
+    fn span_get(span: &[Row], lane: usize) -> Self::Value;
+    #[doc(hidden)]
+    fn span_set(span: &mut [Row], lane: usize, value: Self::Value);
+    #[doc(hidden)]
+    fn span_insert(span: &mut [Row], lane: usize, row: Row);
+    #[doc(hidden)]
+    fn span_insert_span(span: &mut [Row], rows: &[Row; LANES], mask: u8);
+    #[doc(hidden)]
+    fn span_resolve(span: &[Row]) -> ResolvedLanes;
+    #[doc(hidden)]
+    fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES];
+}
+
+/// Gather rows `offset..offset + N` of each pixel of `px` (`stride` rows per pixel, at most
+/// 8 pixels) into a layer-major span; lanes past the pixels hold `fill`.
+#[inline(always)]
+fn gather<const N: usize>(px: &[Row], stride: usize, offset: usize, fill: Row) -> [[Row; LANES]; N] {
+    let mut span = [[fill; LANES]; N];
+    for (lane, p) in px.chunks_exact(stride).take(LANES).enumerate() {
+        if let Some(p) = p.get(offset..offset + N) {
+            for (layer, row) in span.iter_mut().zip(p) {
+                layer[lane] = *row;
+            }
+        }
+    }
+    span
+}
+
+/// The inverse of [`gather`] for the lanes set in `mask`.
+#[inline(always)]
+fn scatter<const N: usize>(px: &mut [Row], stride: usize, offset: usize, mask: u8, span: &[[Row; LANES]; N]) {
+    for (lane, p) in px.chunks_exact_mut(stride).take(LANES).enumerate() {
+        if mask & (1 << lane) == 0 {
+            continue;
+        }
+        if let Some(p) = p.get_mut(offset..offset + N) {
+            for (layer, row) in span.iter().zip(p) {
+                *row = layer[lane];
+            }
+        }
+    }
+}
+
+/// Run `f` on the rows of one lane of `N` layers (one pixel of a span), gathered into an
+/// array and scattered back: a pixel insert in scalar code on span storage.
+#[inline(always)]
+fn with_lane<const N: usize>(layers: &mut [[Row; LANES]; N], lane: usize, f: impl FnOnce(&mut [Row; N])) {
+    let mut px: [Row; N] = core::array::from_fn(|j| layers[j].get(lane).copied().unwrap_or(Row::EMPTY));
+    f(&mut px);
+    for (layer, r) in layers.iter_mut().zip(px) {
+        if let Some(slot) = layer.get_mut(lane) {
+            *slot = r;
+        }
+    }
+}
+
+/// `rows` as `N` layers of 8 rows (a stored span's layers), when it holds exactly that.
+#[inline(always)]
+fn layers<const N: usize>(rows: &[Row]) -> Option<&[[Row; LANES]; N]> {
+    rows.as_chunks::<LANES>().0.try_into().ok()
+}
+
+/// [`layers`], mutable.
+#[inline(always)]
+fn layers_mut<const N: usize>(rows: &mut [Row]) -> Option<&mut [[Row; LANES]; N]> {
+    rows.as_chunks_mut::<LANES>().0.try_into().ok()
+}
+
+/// Resolved lanes of nothing (a span that cannot exist).
+const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
+    color: [[0.0; LANES]; 3],
+    transmittance: [1.0; LANES],
+};
+
+impl<const M: usize, A: Arithmetic> Mlab<M, A> {
+    /// The 8 pixels of `px` as arrays, when all 8 are there.
+    #[inline(always)]
+    fn whole(px: &[Row]) -> Option<&[[Row; M]; LANES]> {
+        px.as_chunks::<M>().0.try_into().ok()
+    }
+}
+
+impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
+    type Arith = A;
+    type Value = [Row; M];
+    const ROWS: usize = {
+        let () = mlab::AtLeastOne::<M>::OK;
+        M
+    };
+    const LAYERS: Layers = Layers::Mlab(M);
+    const PIXEL_MAJOR_SPAN_INSERTS_PAY: bool = true;
+
+    fn resolve(value: &[Row; M]) -> Resolved {
+        resolve_rows(value)
+    }
+
+    fn saturated(_: &[Row; M]) -> bool {
+        false
+    }
+
+    fn pm_clear(rows: &mut [Row]) {
+        rows.fill(Row::EMPTY);
+    }
+
+    fn pm_get(px: &[Row]) -> [Row; M] {
+        px.first_chunk().copied().unwrap_or([Row::EMPTY; M])
+    }
+
+    fn pm_set(px: &mut [Row], value: [Row; M]) {
+        if let Some(p) = px.first_chunk_mut() {
+            *p = value;
+        }
+    }
+
+    #[inline(always)]
+    fn pm_insert(px: &mut [Row], row: Row) {
+        if let Some(p) = px.first_chunk_mut::<M>() {
+            mlab::insert_with::<A, M>(p, row);
+        }
+    }
+
+    /// Gathers the pixels into a layer-major span, inserts in lanes, scatters back the lanes
+    /// that are on.
+    #[inline(always)]
+    fn pm_insert_span(px: &mut [Row], rows: &[Row; LANES], mask: u8) {
+        let mut span = gather::<M>(px, M, 0, Row::EMPTY);
+        lanes::mlab_insert_with::<A, M>(&mut span, rows, mask);
+        scatter::<M>(px, M, 0, mask, &span);
+    }
+
+    #[inline(always)]
+    fn pm_resolve_span(px: &[Row]) -> ResolvedLanes {
+        match Self::whole(px) {
+            Some(px) => lanes::mlab_resolve_pixel_major(px),
+            None => lanes::mlab_resolve(&gather::<M>(px, M, 0, Row::EMPTY)),
+        }
+    }
+
+    #[inline(always)]
+    fn pm_resolve_span_rgba8(px: &[Row], background: Background) -> [[u8; 4]; LANES] {
+        match Self::whole(px) {
+            Some(px) => lanes::mlab_resolve_pixel_major_rgba8(px, background),
+            None => lanes::mlab_resolve_rgba8(&gather::<M>(px, M, 0, Row::EMPTY), background),
+        }
+    }
+
+    #[inline(always)]
+    fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
+        for (o, px) in out.iter_mut().zip(line.as_chunks::<M>().0.as_chunks::<LANES>().0) {
+            *o = lanes::mlab_resolve_pixel_major_rgba8(px, background);
+        }
+    }
+
+    fn span_clear(span: &mut [Row]) {
+        span.fill(Row::EMPTY);
+    }
+
+    fn span_get(span: &[Row], lane: usize) -> [Row; M] {
+        let l = layers::<M>(span);
+        core::array::from_fn(|j| l.and_then(|l| l[j].get(lane)).copied().unwrap_or(Row::EMPTY))
+    }
+
+    fn span_set(span: &mut [Row], lane: usize, value: [Row; M]) {
+        if let Some(l) = layers_mut::<M>(span) {
+            with_lane(l, lane, |px| *px = value);
+        }
+    }
+
+    /// With AVX, a span insert of one lane; without, the pixel's rows gathered, Listing 1 in
+    /// scalar code, scattered back (the faster of the two on each, `docs/performance.md`).
+    /// The same rows either way.
+    #[inline]
+    fn span_insert(span: &mut [Row], lane: usize, row: Row) {
+        if let Some(l) = layers_mut::<M>(span) {
+            if cfg!(target_feature = "avx") {
+                lanes::mlab_insert_with::<A, M>(l, &[row; LANES], 1 << (lane % LANES));
+            } else {
+                with_lane(l, lane, |px| mlab::insert_with::<A, M>(px, row));
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn span_insert_span(span: &mut [Row], rows: &[Row; LANES], mask: u8) {
+        if let Some(l) = layers_mut::<M>(span) {
+            lanes::mlab_insert_with::<A, M>(l, rows, mask);
+        }
+    }
+
+    #[inline(always)]
+    fn span_resolve(span: &[Row]) -> ResolvedLanes {
+        layers::<M>(span).map_or(CLEAR_LANES, lanes::mlab_resolve)
+    }
+
+    #[inline(always)]
+    fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
+        match layers::<M>(span) {
+            Some(l) => lanes::mlab_resolve_rgba8(l, background),
+            None => CLEAR_LANES.rgba8(background),
+        }
+    }
+}
+
+/// Head layers and tails of a stored HT span.
+type HtSpan<'s, const K: usize, T> = (&'s [[Row; LANES]; K], &'s [T; LANES]);
+/// Head layers and tails of a stored HT span, mutable.
+type HtSpanMut<'s, const K: usize, T> = (&'s mut [[Row; LANES]; K], &'s mut [T; LANES]);
+
+impl<const K: usize, A: Arithmetic> Ht<K, A> {
+    /// The bytes of an empty tail in a row-sized slot.
+    #[inline(always)]
+    fn empty_tail() -> Row {
+        Row::from_bytes(A::Tail::EMPTY.to_bytes())
+    }
+
+    /// Head layers and tails of the 1 to 8 pixels of `px` (`K + 1` slots each); lanes past
+    /// them hold empty rows and empty tails.
+    #[inline(always)]
+    fn gather(px: &[Row]) -> ([[Row; LANES]; K], [A::Tail; LANES]) {
+        // A whole span (the common case): a transpose with constant indices, no fill first
+        // (`get` cannot fail there; it keeps the code free of panics).
+        if let Some(px) = px.get(..LANES * (K + 1)) {
+            let at = |lane: usize, slot: usize| px.get(lane * (K + 1) + slot).copied().unwrap_or(Self::empty_tail());
+            let head = core::array::from_fn(|layer| core::array::from_fn(|lane| at(lane, layer)));
+            let tails: [Row; LANES] = core::array::from_fn(|lane| at(lane, K));
+            return (head, bytemuck::cast(tails));
+        }
+        let mut head = [[Row::EMPTY; LANES]; K];
+        let mut tails = [Self::empty_tail(); LANES];
+        // One pass over the pixels' slots (contiguous): head rows, then the tail slot.
+        for (lane, p) in px.chunks_exact(K + 1).take(LANES).enumerate() {
+            if let (Some((t, h)), Some(tail)) = (p.split_last(), tails.get_mut(lane)) {
+                for (layer, row) in head.iter_mut().zip(h) {
+                    layer[lane] = *row;
+                }
+                *tail = *t;
+            }
+        }
+        (head, bytemuck::cast(tails))
+    }
+
+    /// Head layers and tails of a stored span.
+    #[inline(always)]
+    fn parts(span: &[Row]) -> Option<HtSpan<'_, K, A::Tail>> {
+        let (head, tails) = span.split_at_checked(K * LANES)?;
+        let tails: &[Row; LANES] = tails.try_into().ok()?;
+        Some((layers::<K>(head)?, bytemuck::cast_ref(tails)))
+    }
+
+    /// [`parts`](Self::parts), mutable.
+    #[inline(always)]
+    fn parts_mut(span: &mut [Row]) -> Option<HtSpanMut<'_, K, A::Tail>> {
+        let (head, tails) = span.split_at_mut_checked(K * LANES)?;
+        let tails: &mut [Row; LANES] = tails.try_into().ok()?;
+        Some((layers_mut::<K>(head)?, bytemuck::cast_mut(tails)))
+    }
+}
+
+impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
+    type Arith = A;
+    type Value = ([Row; K], A::Tail);
+    const ROWS: usize = K + 1;
+    const LAYERS: Layers = Layers::Hybrid(K);
+    const PIXEL_MAJOR_SPAN_INSERTS_PAY: bool = false;
+    /// Without AVX2 and above `K = 4` the resolve goes span by span: the whole-span loop took
+    /// 11 % longer there (`docs/performance.md`).
+    const PIXEL_MAJOR_LINE_LOOP: bool = K <= 4 || cfg!(target_feature = "avx2");
+
+    fn resolve(value: &Self::Value) -> Resolved {
+        hybrid::resolve(&value.0, value.1)
+    }
+
+    fn saturated(value: &Self::Value) -> bool {
+        value.1.saturated()
+    }
+
+    fn pm_clear(rows: &mut [Row]) {
+        for p in rows.chunks_exact_mut(K + 1) {
+            if let Some((t, h)) = p.split_last_mut() {
+                h.fill(Row::EMPTY);
+                *t = Self::empty_tail();
+            }
+        }
+    }
+
+    fn pm_get(px: &[Row]) -> Self::Value {
+        let mut head = [Row::EMPTY; K];
+        let mut tail = A::Tail::EMPTY;
+        if let Some((t, h)) = px.split_last()
+            && let Some(h) = h.first_chunk::<K>()
+        {
+            head = *h;
+            tail = A::Tail::from_bytes(t.to_bytes());
+        }
+        (head, tail)
+    }
+
+    fn pm_set(px: &mut [Row], (head, tail): Self::Value) {
+        if let Some((t, h)) = px.split_last_mut()
+            && let Some(h) = h.first_chunk_mut::<K>()
+        {
+            *h = head;
+            *t = Row::from_bytes(tail.to_bytes());
+        }
+    }
+
+    #[inline(always)]
+    fn pm_insert(px: &mut [Row], row: Row) {
+        if let Some((t, h)) = px.split_last_mut()
+            && let Ok(head) = <&mut [Row; K]>::try_from(h)
+        {
+            let mut tail = A::Tail::from_bytes(t.to_bytes());
+            hybrid::insert(head, &mut tail, row);
+            *t = Row::from_bytes(tail.to_bytes());
+        }
+    }
+
+    /// Gathers the pixels' heads and tails, inserts in lanes, scatters back the lanes that
+    /// are on.
+    #[inline(always)]
+    fn pm_insert_span(px: &mut [Row], rows: &[Row; LANES], mask: u8) {
+        let (mut head, mut tails) = Self::gather(px);
+        lanes::hybrid_insert_parts(&mut head, &mut tails, rows, mask);
+        scatter::<K>(px, K + 1, 0, mask, &head);
+        let tails: [Row; LANES] = bytemuck::cast(tails);
+        scatter::<1>(px, K + 1, K, mask, &[tails]);
+    }
+
+    #[inline(always)]
+    fn pm_resolve_span(px: &[Row]) -> ResolvedLanes {
+        let (head, tails) = Self::gather(px);
+        lanes::hybrid_resolve_parts(&head, &tails)
+    }
+
+    #[inline(always)]
+    fn pm_resolve_span_rgba8(px: &[Row], background: Background) -> [[u8; 4]; LANES] {
+        let (head, tails) = Self::gather(px);
+        lanes::hybrid_resolve_parts_rgba8(&head, &tails, background)
+    }
+
+    #[inline(always)]
+    fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
+        for (o, px) in out.iter_mut().zip(line.chunks_exact(LANES * (K + 1))) {
+            *o = Self::pm_resolve_span_rgba8(px, background);
+        }
+    }
+
+    fn span_clear(span: &mut [Row]) {
+        let (head, tails) = span.split_at_mut(K * LANES);
+        head.fill(Row::EMPTY);
+        tails.fill(Self::empty_tail());
+    }
+
+    fn span_get(span: &[Row], lane: usize) -> Self::Value {
+        match Self::parts(span) {
+            Some((head, tails)) => (
+                core::array::from_fn(|j| head[j].get(lane).copied().unwrap_or(Row::EMPTY)),
+                tails.get(lane).copied().unwrap_or(A::Tail::EMPTY),
+            ),
+            None => ([Row::EMPTY; K], A::Tail::EMPTY),
+        }
+    }
+
+    fn span_set(span: &mut [Row], lane: usize, (h, t): Self::Value) {
+        if let Some((head, tails)) = Self::parts_mut(span)
+            && let Some(tail) = tails.get_mut(lane)
+        {
+            *tail = t;
+            with_lane(head, lane, |px| *px = h);
+        }
+    }
+
+    /// The pixel's head rows and tail gathered, Listing 2 in scalar code, scattered back:
+    /// one pixel does not pay for eight lanes (`docs/performance.md`).
+    #[inline]
+    fn span_insert(span: &mut [Row], lane: usize, row: Row) {
+        if let Some((head, tails)) = Self::parts_mut(span)
+            && let Some(tail) = tails.get_mut(lane)
+        {
+            with_lane(head, lane, |px| hybrid::insert(px, tail, row));
+        }
+    }
+
+    #[inline(always)]
+    fn span_insert_span(span: &mut [Row], rows: &[Row; LANES], mask: u8) {
+        if let Some((head, tails)) = Self::parts_mut(span) {
+            lanes::hybrid_insert_parts(head, tails, rows, mask);
+        }
+    }
+
+    #[inline(always)]
+    fn span_resolve(span: &[Row]) -> ResolvedLanes {
+        Self::parts(span).map_or(CLEAR_LANES, |(h, t)| lanes::hybrid_resolve_parts(h, t))
+    }
+
+    #[inline(always)]
+    fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
+        match Self::parts(span) {
+            Some((h, t)) => lanes::hybrid_resolve_parts_rgba8(h, t, background),
+            None => CLEAR_LANES.rgba8(background),
+        }
+    }
+}
