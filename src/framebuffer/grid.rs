@@ -72,6 +72,13 @@ fn unit_mut(rows: &mut [Row], i: usize, n: usize) -> Option<&mut [Row]> {
     rows.get_mut(i * n..(i + 1) * n)
 }
 
+/// The lanes of a span insert, rotated so that lane `i` sits at `(i + shift) % 8`.
+fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
+    let mut r = *rows;
+    r.rotate_right(shift);
+    r
+}
+
 /// The background's RGBA8 on 8 lanes (a span that does not exist).
 fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
     [crate::to_rgba8(Resolved::CLEAR.pixel(bg)); LANES]
@@ -202,16 +209,17 @@ impl Arrangement for Spans {
     fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8) {
         let (i, shift) = d.span_lane(x, y);
         let wide = (mask as u16) << shift;
-        let mut span = *span;
-        if shift != 0 {
-            span.rotate_right(shift);
+        let (m0, m1) = (wide as u8, (wide >> 8) as u8);
+        let span = if shift == 0 { *span } else { rotate(span, shift) };
+        if m0 != 0
+            && let Some(s) = unit_mut(rows, i, LANES * P::ROWS)
+        {
+            P::span_insert_span(s, &span, m0);
         }
-        for (i, m) in [(i, wide as u8), (i + 1, (wide >> 8) as u8)] {
-            if m != 0
-                && let Some(s) = unit_mut(rows, i, LANES * P::ROWS)
-            {
-                P::span_insert_span(s, &span, m);
-            }
+        if m1 != 0
+            && let Some(s) = unit_mut(rows, i + 1, LANES * P::ROWS)
+        {
+            P::span_insert_span(s, &span, m1);
         }
     }
 
@@ -366,7 +374,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         Ok(())
     }
 
-    #[inline]
+    #[inline(always)]
     fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
         self.dims.check_span(x, y, mask)?;
         if mask != 0 {
