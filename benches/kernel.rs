@@ -40,7 +40,7 @@ struct Step {
 fn fragment_row(rng: &mut Rng, depth: f32) -> Row {
     let alpha = 0.1 + 0.8 * rng.unit();
     let c = mlab::glam::Vec3::new(rng.unit(), rng.unit(), rng.unit());
-    mlab::Fragment::straight(c, alpha, depth).expect("valid").row()
+    <mlab::Paper as mlab::Arithmetic>::quantize(&mlab::Fragment::straight(c, alpha, depth).expect("valid"))
 }
 
 fn random_stream(spans: usize) -> Vec<Step> {
@@ -121,7 +121,7 @@ fn mlab_lanes_pixel_major<const M: usize>(pixels: &mut [[Row; M]], stream: &[Ste
             .try_into()
             .expect("8 pixels");
         let mut span = lanes::from_pixel_major(chunk);
-        lanes::mlab_insert(&mut span, &s.rows, s.mask);
+        lanes::mlab_insert_with::<mlab::Unbiased, _>(&mut span, &s.rows, s.mask);
         *chunk = lanes::to_pixel_major(&span);
     }
 }
@@ -147,13 +147,20 @@ fn hybrid_lanes<A: Arithmetic, const K: usize>(spans: &mut [HybridSpan<K, A>], s
 
 /// Baseline: unsorted OVER of the same fragments into an RGBA8 buffer (premultiplied,
 /// exact unorm8 like the merge): `dst = src + round(dst * (255 - src.a) / 255)` per byte.
+/// `round(x / 255)` for a product of two bytes (the kernel's exact identity, docs/layout.md).
+#[inline(always)]
+fn div255(x: u32) -> u32 {
+    let y = x + 128;
+    (y + (y >> 8)) >> 8
+}
+
 fn over_pixel(src: u32, dst: u32) -> u32 {
     let inv = 255 - (src >> 24);
     let s = src.to_le_bytes();
     let d = dst.to_le_bytes();
     let mut o = [0u8; 4];
     for c in 0..4 {
-        o[c] = s[c].saturating_add(mlab::unorm::div255(d[c] as u32 * inv) as u8);
+        o[c] = s[c].saturating_add(div255(d[c] as u32 * inv) as u8);
     }
     u32::from_le_bytes(o)
 }

@@ -47,8 +47,7 @@ use crate::unorm::{div255_floor, mul};
 
 /// Which arithmetic, for code that is written once for both (crate-internal).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[doc(hidden)]
-pub enum Kind {
+pub(crate) enum Kind {
     /// Round to nearest, paper tail.
     Paper,
     /// Dithered rounding, wide tail.
@@ -70,6 +69,8 @@ pub trait Arithmetic:
     /// `"paper"` or `"unbiased"`.
     const NAME: &'static str;
     /// Which one (used by the lane code to pick its instructions).
+    // The type is the crate's own: the trait is sealed, no other crate implements or reads it.
+    #[allow(private_interfaces)]
     #[doc(hidden)]
     const KIND: Kind;
     /// The HT tail of this arithmetic.
@@ -96,6 +97,7 @@ pub struct Unbiased;
 
 impl Arithmetic for Paper {
     const NAME: &'static str = "paper";
+    #[allow(private_interfaces)]
     const KIND: Kind = Kind::Paper;
     type Tail = PaperTail;
 
@@ -111,12 +113,13 @@ impl Arithmetic for Paper {
 
     #[inline(always)]
     fn quantize(fragment: &Fragment) -> Row {
-        fragment.row()
+        fragment.row_nearest()
     }
 }
 
 impl Arithmetic for Unbiased {
     const NAME: &'static str = "unbiased";
+    #[allow(private_interfaces)]
     const KIND: Kind = Kind::Unbiased;
     type Tail = Tail;
 
@@ -150,19 +153,19 @@ impl Arithmetic for Unbiased {
             let c = fragment.color();
             quantize_dithered([c.x, c.y, c.z], fragment.alpha(), fragment.depth())
         } else {
-            fragment.row()
+            fragment.row_nearest()
         }
     }
 }
 
 /// The multiplier of the 16-bit mix (odd, so the mix is a bijection of the folded bits).
-pub const MIX_K: u32 = 0x6a09;
+pub(crate) const MIX_K: u32 = 0x6a09;
 
 /// The 16-bit mix shared by both dithers: `x` folded to 16 bits and multiplied modulo 2^16
 /// (a multiplicative hash, whose high bits depend on every folded bit). A shader or a SIMD
 /// unit with 16-bit lanes gets the same bits; the dithers use only the high bits.
 #[inline(always)]
-pub const fn mix16(x: u32) -> u32 {
+pub(crate) const fn mix16(x: u32) -> u32 {
     (((x ^ (x >> 16)) & 0xffff) * MIX_K) & 0xffff
 }
 
@@ -176,14 +179,8 @@ pub const fn mix16(x: u32) -> u32 {
 ///
 /// Over uniformly distributed `s`, each `d` in `0..=254` has probability 257/65536 or
 /// 258/65536 (one value), so `E[floor((p + d) / 255)]` is within `1/65536` of `p / 255`.
-///
-/// ```
-/// use mlab::{Row, arith::merge_dither};
-/// let d = merge_dither(Row::new([1, 2, 3], 200, 1.0), Row::new([4, 5, 6], 250, 2.0));
-/// assert!(d <= 254);
-/// ```
 #[inline(always)]
-pub const fn merge_dither(front: Row, back: Row) -> u32 {
+pub(crate) const fn merge_dither(front: Row, back: Row) -> u32 {
     let [f0, f1] = front.words();
     let [b0, b1] = back.words();
     (mix16(f0 ^ f1 ^ b0 ^ b1) * 255) >> 16
@@ -195,7 +192,7 @@ pub const fn merge_dither(front: Row, back: Row) -> u32 {
 /// (`k / 255`, up to the f32 error of `v * 255`) quantizes to that byte, and
 /// `E[floor(v * 255 + u)]` is within `1/512` of `v * 255`.
 #[inline(always)]
-pub fn fragment_dither(color: [f32; 3], alpha: f32, depth: f32) -> f32 {
+pub(crate) fn fragment_dither(color: [f32; 3], alpha: f32, depth: f32) -> f32 {
     let x = color[0].to_bits() ^ color[1].to_bits() ^ color[2].to_bits() ^ alpha.to_bits() ^ depth.to_bits();
     ((mix16(x) >> 8) as f32 + 0.5) * (1.0 / 256.0)
 }
@@ -203,35 +200,22 @@ pub fn fragment_dither(color: [f32; 3], alpha: f32, depth: f32) -> f32 {
 /// A byte from a value in `[0, 1]` and a dither `u` in `(0, 1)`: `floor(v * 255 + u)` in f32
 /// (multiply, then add, each rounded; truncation).
 #[inline(always)]
-pub fn quantize_with_dither(v: f32, u: f32) -> u8 {
+pub(crate) fn quantize_with_dither(v: f32, u: f32) -> u8 {
     (v * 255.0 + u) as u8
 }
 
 /// Alpha below which [`Unbiased`] quantizes a fragment with a dither, in bytes
 /// (`alpha * 255 < 16.0`, computed in f32).
-pub const FAINT_BYTES: f32 = 16.0;
+pub(crate) const FAINT_BYTES: f32 = 16.0;
 
 /// A dithered quantization of a validated fragment (premultiplied color, alpha, depth):
 /// every channel and alpha with the same dither ([`fragment_dither`]), so that a color that
 /// does not exceed alpha still gives `color byte <= 255 - T byte`. Unbiased on average over
 /// the dither, at twice the noise of rounding to nearest; [`Unbiased`] uses it for faint
 /// fragments only. For many identical faint fragments, rounding to nearest is off in the
-/// same direction every time:
-///
-/// ```
-/// use mlab::arith::quantize_dithered;
-/// // 0.8 x 0.01: to nearest, color 2 against alpha 3 (a ratio of 0.67, not 0.8), every time.
-/// let (mut c, mut a) = (0u32, 0u32);
-/// for i in 0..1000 {
-///     let r = quantize_dithered([0.008, 0.0, 0.0], 0.01, 1.0 + i as f32 * 0.01);
-///     c += r.color()[0] as u32;
-///     a += 255 - r.transmittance() as u32;
-/// }
-/// let ratio = c as f32 / a as f32;
-/// assert!((ratio - 0.8).abs() < 0.05, "{ratio}");
-/// ```
+/// same direction every time (`tests/unbiased.rs`).
 #[inline(always)]
-pub fn quantize_dithered(color: [f32; 3], alpha: f32, depth: f32) -> Row {
+pub(crate) fn quantize_dithered(color: [f32; 3], alpha: f32, depth: f32) -> Row {
     let u = fragment_dither(color, alpha, depth);
     Row::new(
         color.map(|c| quantize_with_dither(c, u)),

@@ -72,7 +72,7 @@ const COL_BITS: u32 = 3;
 /// log2 of the lines of the batcher's window.
 const LINE_BITS: u32 = 5;
 /// Pending spans a [`SpanBatcher`] holds: a window of `8 << COL_BITS` x `1 << LINE_BITS` pixels.
-pub const BATCH_SLOTS: usize = 1 << (COL_BITS + LINE_BITS);
+const BATCH_SLOTS: usize = 1 << (COL_BITS + LINE_BITS);
 
 /// One pending span: the fragments of its lanes as f32 (structure of arrays, quantized 8 at
 /// a time when the span is flushed), which lanes are pending, and which of those hold an

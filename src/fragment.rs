@@ -2,7 +2,7 @@
 
 use crate::row::Row;
 use crate::unorm::quantize;
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 
 /// Why a fragment was rejected. Nothing is clamped or changed silently: a fragment is
 /// either valid as given or refused with one of these.
@@ -57,20 +57,25 @@ impl core::error::Error for FragmentError {}
 /// in `[0, 1]`, depth finite. A fragment with alpha 0 and color above 0 is pure additive
 /// light: it occludes nothing.
 ///
-/// The fragment becomes a [`Row`] (8 bits per channel) exactly once, by [`Fragment::row`]:
+/// The fragment becomes a [`Row`] (8 bits per channel) exactly once, by the arithmetic's
+/// [`Arithmetic::quantize`](crate::Arithmetic::quantize), which every insert calls. In the
+/// paper's arithmetic ([`Paper`](crate::Paper)), and in the default one
+/// ([`Unbiased`](crate::Unbiased)) for every fragment with `alpha * 255 >= 16`:
 /// - color byte = `floor(c * 255 + 0.5)` (f32 multiply, then f32 add, then truncate);
 /// - transmittance byte = `255 - floor(alpha * 255 + 0.5)`, so that a fragment whose color
 ///   does not exceed its alpha gives `color byte <= 255 - T byte`;
 /// - depth stored bit for bit (`-0.0` stays `-0.0`; it compares equal to `+0.0`).
 ///
-/// The quantization error is at most `0.5 / 255` per channel (plus f32 rounding, below
-/// `1e-7`).
+/// The quantization error is then at most `0.5 / 255` per channel (plus f32 rounding, below
+/// `1e-7`). Fainter fragments are dithered by `Unbiased` (`docs/algorithm.md`), so that many
+/// of them do not all round the same way.
 ///
 /// ```
 /// use mlab::glam::Vec3;
-/// use mlab::{Fragment, FragmentError, Row};
+/// use mlab::{Arithmetic, Fragment, FragmentError, Paper, Row, Unbiased};
 /// let f = Fragment::straight(Vec3::new(1.0, 0.5, 0.0), 0.5, 2.0)?;
-/// assert_eq!(f.row(), Row::new([128, 64, 0], 127, 2.0));
+/// assert_eq!(Paper::quantize(&f), Row::new([128, 64, 0], 127, 2.0));
+/// assert_eq!(Unbiased::quantize(&f), Paper::quantize(&f)); // not faint: the same bytes
 /// assert_eq!(Fragment::premultiplied(Vec3::ONE, 1.5, 2.0), Err(FragmentError::AlphaOutOfRange));
 /// assert_eq!(Fragment::straight_rgba([1.0, 0.5, 0.0, 0.5], 2.0)?, f);
 /// # Ok::<(), FragmentError>(())
@@ -183,11 +188,6 @@ impl Fragment {
         Fragment::straight(Vec3::new(r, g, b), a, depth)
     }
 
-    /// A fragment from premultiplied RGBA (`xyz` = premultiplied color, `w` = alpha).
-    pub fn from_premultiplied_rgba(rgba: Vec4, depth: f32) -> Result<Fragment, FragmentError> {
-        Fragment::premultiplied(rgba.truncate(), rgba.w, depth)
-    }
-
     /// A fragment from premultiplied color and transmittance `t = 1 - alpha` in `[0, 1]`.
     /// Alpha is computed as `1 - t` in f32 (exact for `t >= 0.5`).
     pub fn with_transmittance(color: Vec3, transmittance: f32, depth: f32) -> Result<Fragment, FragmentError> {
@@ -233,19 +233,14 @@ impl Fragment {
         self.depth
     }
 
-    /// The quantized row (rounding rules in the [type docs](Fragment)).
+    /// The row rounded to nearest (the paper's rule, [`Paper::quantize`](crate::Paper);
+    /// the default [`Unbiased`](crate::Unbiased) dithers faint fragments instead).
     #[inline]
-    pub fn row(&self) -> Row {
+    pub(crate) fn row_nearest(&self) -> Row {
         Row::new(
             [quantize(self.color.x), quantize(self.color.y), quantize(self.color.z)],
             255 - quantize(self.alpha),
             self.depth,
         )
-    }
-}
-
-impl From<Fragment> for Row {
-    fn from(f: Fragment) -> Row {
-        f.row()
     }
 }

@@ -39,10 +39,7 @@ use crate::row::Row;
 use crate::vector::{RowLanes, Slot};
 use glam::Vec3;
 
-pub use crate::tail::{
-    PaperTail, TAIL_ALPHA_MAX, TAIL_COLOR_MAX, TAIL_COUNT_MAX, Tail, TailFormat, WIDE_ALPHA_BITS, WIDE_COLOR_BITS,
-    WIDE_COUNT_BITS,
-};
+pub use crate::tail::{PaperTail, Tail, TailFormat};
 
 /// Listing 2 on `K` head rows and a tail: insert `row` into the head, accumulate the row
 /// pushed out into the tail. `K = 0` is allowed (every fragment goes to the tail). The tail
@@ -91,7 +88,7 @@ pub fn resolve<T: TailFormat>(head: &[Row], tail: T) -> Resolved {
 ///
 /// ```
 /// use mlab::glam::Vec3;
-/// use mlab::{Fragment, Hybrid};
+/// use mlab::{Fragment, Hybrid, TailFormat};
 /// let mut h = Hybrid::<1>::new();
 /// h.insert(&Fragment::straight(Vec3::X, 0.5, 1.0)?);
 /// h.insert(&Fragment::straight(Vec3::Y, 0.5, 2.0)?); // goes to the tail
@@ -108,9 +105,6 @@ pub struct Hybrid<const K: usize, A: Arithmetic = Unbiased> {
 }
 
 impl<const K: usize, A: Arithmetic> Hybrid<K, A> {
-    /// Size in bytes (`8 * (K + 1)`).
-    pub const BYTES: usize = 8 * (K + 1);
-
     /// Empty head rows and an empty tail.
     pub const fn new() -> Self {
         Hybrid {

@@ -135,10 +135,10 @@
 //! | [`Hybrid<K>`] | HT: `K` head rows + tail | `8 * (K + 1)` bytes |
 //! | framebuffers, [`SpanBatcher`] | views over caller-owned `&mut [Row]`; a fixed-size batcher | none; about 43 KiB |
 //!
-//! - [`mlab::insert`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
+//! - [`mlab::insert_with`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
 //!   [`resolve_rows`] is Eq. 5 and [`Resolved::over`] Eq. 6. The module `mlab::mlab` is
 //!   named after the method, as `mlab::hybrid` is: its functions are written with the path
-//!   (`mlab::mlab::insert`), the crate root re-exports its type ([`BlendingArray`]).
+//!   (`mlab::mlab::insert_with`), the crate root re-exports its type ([`BlendingArray`]).
 //! - Fragments are validated once ([`Fragment`], typed [`FragmentError`]) and quantized once.
 //! - The merge is exact unorm8 integer arithmetic, reproducible on any machine and in a
 //!   shader, in one of two arithmetics ([`arith`]), a type parameter of every kernel type:
@@ -166,7 +166,7 @@ pub mod mlab;
 pub mod resolve;
 pub mod row;
 mod tail;
-pub mod unorm;
+mod unorm;
 mod vector;
 
 pub use arith::{Arithmetic, Paper, Unbiased};

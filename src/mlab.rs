@@ -37,23 +37,6 @@ impl<const M: usize> AtLeastOne<M> {
     pub(crate) const OK: () = assert!(M >= 1, "an MLAB blending array needs at least one row (M >= 1)");
 }
 
-/// Merge two neighbouring rows into one (paper Eq. 7 and 8) in the default arithmetic
-/// ([`Unbiased`]): `front` is nearer; see [`merge_with`].
-///
-/// ```
-/// use mlab::{Row, mlab::merge};
-/// let front = Row::new([100, 0, 0], 128, 1.0);
-/// assert_eq!(merge(front, Row::EMPTY), front);
-/// let back = Row::new([0, 200, 0], 0, 2.0);
-/// let m = merge(front, back);
-/// assert_eq!((m.transmittance(), m.depth()), (0, 1.0));
-/// assert!(m.color()[1] == 100 || m.color()[1] == 101); // 200 * 128 / 255 = 100.39
-/// ```
-#[inline(always)]
-pub fn merge(front: Row, back: Row) -> Row {
-    Unbiased::merge(front, back)
-}
-
 /// Merge two neighbouring rows (Eq. 7 and 8) in the arithmetic `A`: `front` is nearer,
 /// `A = A_front + A_back * T_front` per channel (saturating at 255), `T = T_front * T_back`,
 /// `z = z_front`, each product rounded as `A` says ([`crate::arith`]).
@@ -67,12 +50,6 @@ pub fn merge(front: Row, back: Row) -> Row {
 #[inline(always)]
 pub fn merge_with<A: Arithmetic>(front: Row, back: Row) -> Row {
     A::merge(front, back)
-}
-
-/// Listing 1 on a blending array of `M` rows in the default arithmetic: see [`insert_with`].
-#[inline]
-pub fn insert<const M: usize>(rows: &mut [Row; M], row: Row) {
-    insert_with::<Unbiased, M>(rows, row);
 }
 
 /// Listing 1 on a blending array of `M` rows in the arithmetic `A`: insert `row`, then
@@ -141,11 +118,6 @@ pub struct BlendingArray<const M: usize, A: Arithmetic = Unbiased> {
 }
 
 impl<const M: usize, A: Arithmetic> BlendingArray<M, A> {
-    /// Number of rows.
-    pub const ROWS: usize = M;
-    /// Size in bytes (`8 * M`).
-    pub const BYTES: usize = 8 * M;
-
     /// An array of empty rows.
     pub const fn new() -> Self {
         let () = AtLeastOne::<M>::OK;
@@ -168,11 +140,6 @@ impl<const M: usize, A: Arithmetic> BlendingArray<M, A> {
     /// The rows, front to back.
     pub const fn rows(&self) -> &[Row; M] {
         &self.rows
-    }
-
-    /// The rows, mutable.
-    pub fn rows_mut(&mut self) -> &mut [Row; M] {
-        &mut self.rows
     }
 
     /// Reset to empty rows.

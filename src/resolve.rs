@@ -79,13 +79,7 @@ impl FloatLanes for f32 {
 }
 
 /// `1 / 255` rounded to f32; `255.0 * INV255 == 1.0` exactly (tested).
-pub const INV255: f32 = 1.0 / 255.0;
-
-/// A byte as a unorm value: `b as f32 * INV255`.
-#[inline(always)]
-pub fn unorm(b: u8) -> f32 {
-    b as f32 * INV255
-}
+pub(crate) const INV255: f32 = 1.0 / 255.0;
 
 /// The composite of the transparent layers of one pixel, before the background.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -258,8 +252,6 @@ mod tests {
     #[test]
     fn inv255_is_exact_at_255() {
         assert_eq!(255.0 * INV255, 1.0);
-        assert_eq!(unorm(255), 1.0);
-        assert_eq!(unorm(0), 0.0);
     }
 
     #[test]

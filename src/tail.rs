@@ -10,8 +10,7 @@ use glam::Vec3;
 
 /// Which tail layout (used by the lane code to pick its instructions).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[doc(hidden)]
-pub enum Layout {
+pub(crate) enum Layout {
     /// [`PaperTail`]: 10/10/10-bit colors, 16-bit alpha and count.
     Paper,
     /// [`Tail`]: 13/13/13-bit colors, 14-bit alpha, 11-bit count.
@@ -26,6 +25,8 @@ pub trait TailFormat:
     /// No fragment accumulated (all bits zero).
     const EMPTY: Self;
     /// Which layout (used by the lane code).
+    // The type is the crate's own: the trait is sealed, no other crate implements or reads it.
+    #[allow(private_interfaces)]
     #[doc(hidden)]
     const LAYOUT: Layout;
     /// Largest value of each color sum.
@@ -104,64 +105,6 @@ mod sealed {
     impl Sealed for super::PaperTail {}
 }
 
-/// The [`TailFormat`] methods as inherent methods of a tail type, so that they need no
-/// trait import (`tail.count()` would otherwise resolve to `Iterator::count` in the error).
-macro_rules! tail_methods {
-    ($t:ty) => {
-        impl $t {
-            /// No fragment accumulated.
-            pub const EMPTY: $t = <$t as TailFormat>::EMPTY;
-
-            /// Sums of premultiplied color bytes `[R, G, B]` ([`TailFormat::color_sum`]).
-            pub fn color_sum(self) -> [u32; 3] {
-                <$t as TailFormat>::color_sum(self)
-            }
-
-            /// Sum of alpha bytes ([`TailFormat::alpha_sum`]).
-            pub fn alpha_sum(self) -> u32 {
-                <$t as TailFormat>::alpha_sum(self)
-            }
-
-            /// Number of fragments accumulated ([`TailFormat::count`]).
-            pub fn count(self) -> u32 {
-                <$t as TailFormat>::count(self)
-            }
-
-            /// Accumulate a row ([`TailFormat::add`]).
-            pub fn add(&mut self, row: Row) {
-                <$t as TailFormat>::add(self, row)
-            }
-
-            /// Whether any field is at its maximum ([`TailFormat::saturated`]).
-            pub fn saturated(self) -> bool {
-                <$t as TailFormat>::saturated(self)
-            }
-
-            /// Resolve the tail alone ([`TailFormat::resolve`]).
-            pub fn resolve(self) -> Resolved {
-                <$t as TailFormat>::resolve(self)
-            }
-
-            /// A tail from its fields, saturating ([`TailFormat::from_sums`]).
-            pub fn from_sums(color: [u32; 3], alpha: u32, count: u32) -> $t {
-                <$t as TailFormat>::from_sums(color, alpha, count)
-            }
-
-            /// The 8 bytes.
-            pub fn to_bytes(self) -> [u8; 8] {
-                <$t as TailFormat>::to_bytes(self)
-            }
-
-            /// The tail from 8 bytes (any bytes are a valid tail).
-            pub fn from_bytes(bytes: [u8; 8]) -> $t {
-                <$t as TailFormat>::from_bytes(bytes)
-            }
-        }
-    };
-}
-tail_methods!(Tail);
-tail_methods!(PaperTail);
-
 /// The paper's 8-byte tail of Hybrid Transparency ([`Paper`](crate::Paper) arithmetic).
 ///
 /// | bits of `word0` (bytes 0..4, LE) | field |
@@ -181,7 +124,7 @@ tail_methods!(PaperTail);
 /// default [`Tail`] does not.
 ///
 /// ```
-/// use mlab::{Row, hybrid::PaperTail};
+/// use mlab::{Row, TailFormat, hybrid::PaperTail};
 /// let mut tail = PaperTail::EMPTY;
 /// tail.add(Row::new([255, 2, 3], 128, 5.0));
 /// assert_eq!(tail.words(), [255 | 2 << 10 | 3 << 20, 127 | 1 << 16]);
@@ -198,11 +141,11 @@ const _: () = assert!(core::mem::size_of::<PaperTail>() == 8);
 const _: () = assert!(core::mem::align_of::<PaperTail>() == 8);
 
 /// Largest value of a 10-bit color sum of the [`PaperTail`].
-pub const TAIL_COLOR_MAX: u32 = 1023;
+pub(crate) const TAIL_COLOR_MAX: u32 = 1023;
 /// Largest value of the 16-bit alpha sum of the [`PaperTail`].
-pub const TAIL_ALPHA_MAX: u32 = 65535;
+pub(crate) const TAIL_ALPHA_MAX: u32 = 65535;
 /// Largest fragment count of the [`PaperTail`].
-pub const TAIL_COUNT_MAX: u32 = 65535;
+pub(crate) const TAIL_COUNT_MAX: u32 = 65535;
 
 impl PaperTail {
     /// The tail from its two little-endian words.
@@ -219,7 +162,7 @@ impl PaperTail {
     }
 
     /// The two spare bits (30 and 31 of `word0`).
-    pub const fn spare(self) -> u32 {
+    pub(crate) const fn spare(self) -> u32 {
         self.words()[0] >> 30
     }
 }
@@ -229,6 +172,7 @@ impl TailFormat for PaperTail {
         word0: [0; 4],
         word1: [0; 4],
     };
+    #[allow(private_interfaces)]
     const LAYOUT: Layout = Layout::Paper;
     const COLOR_MAX: u32 = TAIL_COLOR_MAX;
     const ALPHA_MAX: u32 = TAIL_ALPHA_MAX;
@@ -265,11 +209,11 @@ impl TailFormat for PaperTail {
 }
 
 /// Width in bits of each color sum of the default [`Tail`].
-pub const WIDE_COLOR_BITS: u32 = 13;
+pub(crate) const WIDE_COLOR_BITS: u32 = 13;
 /// Width in bits of the alpha sum of the default [`Tail`].
-pub const WIDE_ALPHA_BITS: u32 = 14;
+pub(crate) const WIDE_ALPHA_BITS: u32 = 14;
 /// Width in bits of the fragment count of the default [`Tail`].
-pub const WIDE_COUNT_BITS: u32 = 11;
+pub(crate) const WIDE_COUNT_BITS: u32 = 11;
 
 /// The default 8-byte tail of Hybrid Transparency ([`Unbiased`](crate::Unbiased)
 /// arithmetic): the same exact saturating sums as the paper's, re-split so that they do not
@@ -293,10 +237,10 @@ pub const WIDE_COUNT_BITS: u32 = 11;
 /// not additive) saturate first only past 32 units of light behind the head.
 ///
 /// ```
-/// use mlab::{Row, Tail};
+/// use mlab::{Row, Tail, TailFormat};
 /// let mut tail = Tail::EMPTY;
 /// tail.add(Row::new([255, 2, 3], 128, 5.0));
-/// assert_eq!(tail.to_le_u64(), 255 | 2 << 13 | 3 << 26 | 127 << 39 | 1 << 53);
+/// assert_eq!(u64::from_le_bytes(tail.to_bytes()), 255 | 2 << 13 | 3 << 26 | 127 << 39 | 1 << 53);
 /// assert_eq!(tail.to_bytes(), [0xff, 0x40, 0x00, 0x0c, 0x80, 0x3f, 0x20, 0x00]);
 /// ```
 #[repr(C, align(8))]
@@ -318,12 +262,12 @@ const _: () = assert!(WIDE_COUNT_SHIFT + WIDE_COUNT_BITS == 64);
 
 impl Tail {
     /// The tail as one little-endian `u64` (layout in the [type docs](Tail)).
-    pub const fn to_le_u64(self) -> u64 {
+    pub(crate) const fn to_le_u64(self) -> u64 {
         u64::from_le_bytes(self.bytes)
     }
 
     /// The tail from one little-endian `u64`.
-    pub const fn from_le_u64(v: u64) -> Tail {
+    pub(crate) const fn from_le_u64(v: u64) -> Tail {
         Tail { bytes: v.to_le_bytes() }
     }
 
@@ -346,6 +290,7 @@ impl Tail {
 
 impl TailFormat for Tail {
     const EMPTY: Tail = Tail { bytes: [0; 8] };
+    #[allow(private_interfaces)]
     const LAYOUT: Layout = Layout::Wide;
     const COLOR_MAX: u32 = WIDE_COLOR_MAX as u32;
     const ALPHA_MAX: u32 = WIDE_ALPHA_MAX as u32;

@@ -18,7 +18,7 @@
 ///
 /// Exact on that range; the test `div255_is_exact` checks every value.
 #[inline(always)]
-pub const fn div255(x: u32) -> u32 {
+pub(crate) const fn div255(x: u32) -> u32 {
     let y = x + 128;
     (y + (y >> 8)) >> 8
 }
@@ -28,7 +28,7 @@ pub const fn div255(x: u32) -> u32 {
 /// `mul(a, 255) == a` and `mul(a, 0) == 0` for every `a`, so merging a row with the empty
 /// row (or with an opaque one) is exact.
 #[inline(always)]
-pub const fn mul(a: u8, b: u8) -> u8 {
+pub(crate) const fn mul(a: u8, b: u8) -> u8 {
     // The result is at most 255: no truncation.
     div255(a as u32 * b as u32) as u8
 }
@@ -39,7 +39,7 @@ pub const fn mul(a: u8, b: u8) -> u8 {
 /// Exact on that range (`y = 255 q + r` gives `(y + 1) * 257 = 65536 q + 257 (r + 1) - q`
 /// with `0 < 257 (r + 1) - q < 65536` for `q <= 255`); `div255_floor_is_exact` checks every value.
 #[inline(always)]
-pub const fn div255_floor(y: u32) -> u32 {
+pub(crate) const fn div255_floor(y: u32) -> u32 {
     ((y + 1) * 257) >> 16
 }
 
@@ -49,7 +49,7 @@ pub const fn div255_floor(y: u32) -> u32 {
 /// contracts them into an FMA). Out-of-range and NaN inputs saturate (`as` casts from
 /// float saturate and map NaN to 0), but validated fragments never produce them.
 #[inline(always)]
-pub fn quantize(v: f32) -> u8 {
+pub(crate) fn quantize(v: f32) -> u8 {
     (v * 255.0 + 0.5) as u8
 }
 

@@ -2,6 +2,7 @@
 //! coordinates and change nothing when they do.
 
 use mlab::Framebuffer;
+use mlab::TailFormat as _;
 use mlab::glam::{Vec3, Vec4};
 use mlab::{
     Arithmetic, Background, Fragment, FragmentError as E, FramebufferError, HybridFramebuffer, MlabFramebuffer, Row,
@@ -43,7 +44,7 @@ fn every_bad_fragment_class_is_rejected() {
         (Fragment::with_transmittance(ok, f32::NAN, 1.0), E::NanAlpha),
         (Fragment::additive(Vec3::new(2.0, 0.0, 0.0), 1.0), E::ColorAboveOne),
         (
-            Fragment::from_premultiplied_rgba(Vec4::new(0.1, 0.1, 0.1, 2.0), 1.0),
+            Fragment::premultiplied_rgba([0.1, 0.1, 0.1, 2.0], 1.0),
             E::AlphaOutOfRange,
         ),
         // NaN is reported before any other class.
@@ -66,7 +67,7 @@ fn valid_edge_fragments_are_accepted() {
     assert!(Fragment::straight(Vec3::splat(4.0), 0.25, -5.0).is_ok()); // HDR straight, premul = 1
     let f = Fragment::premultiplied(Vec3::splat(0.9), 0.1, -0.0).unwrap();
     assert_eq!(
-        f.row().depth().to_bits(),
+        <mlab::Paper as mlab::Arithmetic>::quantize(&f).depth().to_bits(),
         (-0.0f32).to_bits(),
         "depth stored bit for bit"
     );
@@ -143,7 +144,7 @@ fn framebuffers_insert_resolve_and_expose_bytes() {
     );
     let mut out = vec![Vec4::ZERO; 4];
     fb.resolve_into(&mut out, Background::Transparent).unwrap();
-    let inv = mlab::resolve::INV255;
+    let inv = 1.0f32 / 255.0;
     assert_eq!(out[1], Vec4::new(0.0, g as f32 * inv, 0.0, 1.0 - t as f32 * inv));
     assert_eq!(out[0], Vec4::ZERO);
     let mut half = vec![[mlab::half::f16::ZERO; 4]; 4];

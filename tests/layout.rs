@@ -1,5 +1,6 @@
 //! 9. Layout: rows and tails pinned to literal bytes; size and alignment asserted.
 
+use mlab::TailFormat as _;
 use mlab::hybrid::PaperTail;
 use mlab::{Hybrid, Paper, Row, Tail};
 
@@ -48,7 +49,7 @@ fn tail_layout_is_pinned() {
     // R = 0x1abc, G = 0x0155, B = 0x1001, alpha = 0x2fed, count = 0x587 as one LE u64:
     // R | G << 13 | B << 26 | alpha << 39 | count << 53.
     let t = Tail::from_sums([0x1abc, 0x155, 0x1001], 0x2fed, 0x587);
-    assert_eq!(t.to_le_u64(), 0xb0f7_f6c0_042a_babc);
+    assert_eq!(u64::from_le_bytes(t.to_bytes()), 0xb0f7_f6c0_042a_babc);
     assert_eq!(t.to_bytes(), [0xbc, 0xba, 0x2a, 0x04, 0xc0, 0xf6, 0xf7, 0xb0]);
     assert_eq!(t.words(), [0x042a_babc, 0xb0f7_f6c0]);
     assert_eq!(bytemuck::bytes_of(&t), &t.to_bytes());
@@ -60,7 +61,7 @@ fn tail_layout_is_pinned() {
     );
     // Fields saturate at construction: 13-bit colors, 14-bit alpha, 11-bit count.
     assert_eq!(
-        Tail::from_sums([9000, 0, 0], 1 << 20, 1 << 20).to_le_u64(),
+        u64::from_le_bytes(Tail::from_sums([9000, 0, 0], 1 << 20, 1 << 20).to_bytes()),
         0xffff_ff80_0000_1fff
     );
     assert!(Tail::from_sums([0, 0, 8191], 0, 1).saturated());
@@ -72,20 +73,23 @@ fn tail_layout_is_pinned() {
 #[test]
 fn array_sizes() {
     assert_eq!(core::mem::size_of::<mlab::BlendingArray<4>>(), 32);
-    assert_eq!(mlab::BlendingArray::<4>::BYTES, 32);
     assert_eq!(core::mem::size_of::<Hybrid<3>>(), 32);
-    assert_eq!(Hybrid::<3>::BYTES, 32);
     assert_eq!(core::mem::size_of::<Hybrid<3, Paper>>(), 32);
     assert_eq!(core::mem::size_of::<[Row; 8]>(), 64);
 }
 
-/// `resolve::unorm`, the documented reading of a byte (`b as f32 * INV255`), for every
-/// byte: 0 and 255 exact, strictly increasing, within one f32 ulp of `b / 255`, quantized
-/// back to the same byte (`unorm::quantize`, as a fragment's color is), and what the resolve
-/// of a single row gives for its color and transmittance bytes, bit for bit.
+/// The documented reading of a byte (`b as f32 * INV255`, `INV255 = 1 / 255` rounded to
+/// f32; docs/layout.md), for every byte: 0 and 255 exact, strictly increasing, within one
+/// f32 ulp of `b / 255`, quantized back to the same byte (as a fragment's color is), and what
+/// the resolve of a single row gives for its color and transmittance bytes, bit for bit.
 #[test]
 fn unorm_reads_every_byte_as_the_resolve_does() {
-    use mlab::resolve::{INV255, unorm};
+    const INV255: f32 = 1.0 / 255.0;
+    let unorm = |b: u8| f32::from(b) * INV255;
+    let quantize = |v: f32| {
+        let f = mlab::Fragment::premultiplied(mlab::glam::Vec3::splat(v), 1.0, 1.0).expect("valid");
+        <Paper as mlab::Arithmetic>::quantize(&f).color()[0]
+    };
     assert_eq!(unorm(0), 0.0);
     assert_eq!(unorm(255), 1.0);
     for b in 0..=255u8 {
@@ -97,7 +101,7 @@ fn unorm_reads_every_byte_as_the_resolve_does() {
         if b > 0 {
             assert!(v > unorm(b - 1), "byte {b} not above byte {}", b - 1);
         }
-        assert_eq!(mlab::unorm::quantize(v), b, "byte {b} does not round-trip");
+        assert_eq!(quantize(v), b, "byte {b} does not round-trip");
         let r = mlab::resolve_rows(&[Row::new([b, 255 - b, b / 2], b, 1.0)]);
         assert_eq!(
             r.color.to_array().map(f32::to_bits),

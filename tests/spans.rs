@@ -22,7 +22,7 @@ type Op = (u32, u32, [Row; LANES], u8);
 
 fn ops(width: u32, height: u32) -> impl Strategy<Value = Vec<Op>> {
     let row = prop_oneof![
-        4 => common::normal_fragment().prop_map(|f| f.row()),
+        4 => common::normal_fragment().prop_map(|f| <mlab::Paper as mlab::Arithmetic>::quantize(&f)),
         1 => any::<u64>().prop_map(|b| Row::from_bytes(b.to_le_bytes())),
     ];
     prop::collection::vec((0..width, 0..height, prop::array::uniform8(row), any::<u8>()), 0..60).prop_map(move |v| {

@@ -110,9 +110,9 @@ fn opaque_fragments_converge_to_a_z_buffer() {
         let mut a2 = [Row::EMPTY; 2];
         let mut a4 = [Row::EMPTY; 4];
         for &r in &rows {
-            listing1::insert(&mut a1, r);
-            listing1::insert(&mut a2, r);
-            listing1::insert(&mut a4, r);
+            listing1::insert_with::<mlab::Unbiased, _>(&mut a1, r);
+            listing1::insert_with::<mlab::Unbiased, _>(&mut a2, r);
+            listing1::insert_with::<mlab::Unbiased, _>(&mut a4, r);
         }
         for front in [a1[0], a2[0], a4[0]] {
             assert_eq!(front, nearest);

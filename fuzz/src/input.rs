@@ -9,7 +9,7 @@
 //! | `0xC0..=0xDF` | a table of special values (NaN, infinities, `-0.0`, just above 1, subnormals, ...) |
 //! | `0xE0..=0xFF` | the next four bytes as raw IEEE-754 bits, little-endian (any NaN payload) |
 
-use mlab::glam::{Vec3, Vec4};
+use mlab::glam::Vec3;
 use mlab::{Fragment, FragmentError};
 
 /// Special values reached by one tag byte.
@@ -128,7 +128,7 @@ pub enum Ctor {
     WithTransmittance,
     /// `Fragment::additive(color, z)` (`a` is unused, 0).
     Additive,
-    /// `Fragment::from_premultiplied_rgba(color.extend(a), z)`.
+    /// `Fragment::premultiplied_rgba(color.extend(a).to_array(), z)`.
     PremultipliedRgba,
 }
 
@@ -154,7 +154,7 @@ impl RawFragment {
             Ctor::Straight => Fragment::straight(c, self.a, self.z),
             Ctor::WithTransmittance => Fragment::with_transmittance(c, self.a, self.z),
             Ctor::Additive => Fragment::additive(c, self.z),
-            Ctor::PremultipliedRgba => Fragment::from_premultiplied_rgba(Vec4::new(c.x, c.y, c.z, self.a), self.z),
+            Ctor::PremultipliedRgba => Fragment::premultiplied_rgba([c.x, c.y, c.z, self.a], self.z),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! Issue 9 measurements: fragments per covered pixel and the HT tail sums, against the
 //! kernel and hand-computed cases.
 
-use mlab::hybrid::PaperTail;
+use mlab::hybrid::{PaperTail, TailFormat};
 use mlab::{Arithmetic, Framebuffer, HybridFramebuffer, Paper, Row, Unbiased};
 use oit_lab::faint::{TailSums, depth, quantile, run_stream, spread, tail_sums};
 use oit_lab::methods::{Arith, BinnedStream, Image, Method, hybrid_with};

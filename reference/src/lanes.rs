@@ -8,7 +8,7 @@
 
 use mlab::glam::Vec3;
 use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan, ResolvedLanes};
-use mlab::{Arithmetic, Background, Fragment, Hybrid, Resolved, Row, TailFormat, Unbiased, mlab as listing1, to_rgba8};
+use mlab::{Arithmetic, Background, Fragment, Hybrid, Resolved, Row, TailFormat, mlab as listing1, to_rgba8};
 
 use crate::model::Model;
 
@@ -135,12 +135,6 @@ pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
     check_resolved_lanes(&lanes::hybrid_resolve(span), &want)
 }
 
-/// True for the default arithmetic, whose entry points without a type parameter
-/// (`FragmentLanes::quantize`, `lanes::mlab_insert_fragments`, ...) are checked too.
-fn is_default<A: Arithmetic>() -> bool {
-    A::NAME == Unbiased::NAME
-}
-
 /// Validation and quantization in lanes on 8 raw fragments `(color, alpha, depth)`, given
 /// as premultiplied and as straight color: `FragmentLanes::quantize_with::<A>` and
 /// `quantize_straight_with::<A>` report exactly the lanes of `mask` as valid or invalid,
@@ -163,14 +157,6 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
         } else {
             fl.quantize_with::<A>(mask)
         };
-        if is_default::<A>() {
-            let d = if straight {
-                fl.quantize_straight(mask)
-            } else {
-                fl.quantize(mask)
-            };
-            ensure!(d == q, "the default quantization is not {name}'s: {d:?} vs {q:?}");
-        }
         ensure!(q.valid & q.invalid == 0, "lanes both valid and invalid: {q:?}");
         ensure!(
             q.valid | q.invalid == mask,
@@ -213,14 +199,6 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
         invalid.0 == q.invalid,
         "mlab_insert_fragments_with: {invalid:?} vs {q:?}"
     );
-    if is_default::<A>() {
-        let mut d = [[Row::EMPTY; LANES]; 2];
-        let invalid = lanes::mlab_insert_fragments(&mut d, &fl, mask);
-        ensure!(
-            invalid.0 == q.invalid && d == span,
-            "mlab_insert_fragments is not {name}'s"
-        );
-    }
     let mut expected = [[Row::EMPTY; 2]; LANES];
     for (lane, p) in expected.iter_mut().enumerate() {
         if q.valid >> lane & 1 == 1 {

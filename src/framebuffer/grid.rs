@@ -8,10 +8,12 @@ use core::fmt::Debug;
 use core::marker::PhantomData;
 
 use super::pixel::Pixel;
-use super::{Dims, Framebuffer, FramebufferError, write_lines, write_spans};
+use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
 use crate::lanes::{LANES, ResolvedLanes};
-use crate::resolve::{Background, Resolved};
+use crate::resolve::{Background, Resolved, to_rgba16f};
 use crate::row::Row;
+use glam::Vec4;
+use half::f16;
 
 mod sealed {
     pub trait Sealed {}
@@ -51,13 +53,17 @@ pub trait Arrangement: sealed::Sealed + Copy + Debug + Default + Send + Sync + '
     fn resolve_span<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32) -> Option<ResolvedLanes>;
     #[doc(hidden)]
     fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES];
+    /// Eq. 5 on one whole span of storage (8 consecutive pixels, or one stored span).
     #[doc(hidden)]
-    fn resolve_rgba8<P: Pixel>(
-        rows: &[Row],
-        d: Dims,
-        out: &mut [[u8; 4]],
-        bg: Background,
-    ) -> Result<(), FramebufferError>;
+    fn whole<P: Pixel>(unit: &[Row]) -> ResolvedLanes;
+    /// The whole spans of one line (`line`: the line's rows) straight to RGBA8.
+    #[doc(hidden)]
+    fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background);
+    /// Whether whole-frame resolves walk whole spans line by line (else span by span).
+    #[doc(hidden)]
+    fn line_loop<P: Pixel>() -> bool {
+        true
+    }
 }
 
 /// Unit `i` of `n` rows.
@@ -77,6 +83,14 @@ fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
     let mut r = *rows;
     r.rotate_right(shift);
     r
+}
+
+/// `out[i] = f(unit i of line)`, for the whole 8-pixel units of a line's rows.
+#[inline(always)]
+fn units<P: Pixel, T>(line: &[Row], out: &mut [[T; LANES]], f: impl Fn(&[Row]) -> [T; LANES]) {
+    for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * P::ROWS)) {
+        *o = f(u);
+    }
 }
 
 /// The background's RGBA8 on 8 lanes (a span that does not exist).
@@ -149,24 +163,18 @@ impl Arrangement for PixelMajor {
         }
     }
 
-    /// Line by line, the whole spans straight from the line's rows (no per-span bounds
-    /// check, the lanes resolve inlined), the partial last span once.
-    fn resolve_rgba8<P: Pixel>(
-        rows: &[Row],
-        d: Dims,
-        out: &mut [[u8; 4]],
-        bg: Background,
-    ) -> Result<(), FramebufferError> {
-        if !P::PIXEL_MAJOR_LINE_LOOP {
-            return write_spans(d, out, |s, y| Self::resolve_span_rgba8::<P>(rows, d, s, y, bg));
-        }
-        let mut lines = rows.chunks_exact((d.width as usize * P::ROWS).max(1));
-        write_lines(
-            d,
-            out,
-            |spans| P::pm_resolve_line_rgba8(lines.next().unwrap_or(&[]), spans, bg),
-            |s, y| Self::resolve_span_rgba8::<P>(rows, d, s, y, bg),
-        )
+    #[inline(always)]
+    fn whole<P: Pixel>(unit: &[Row]) -> ResolvedLanes {
+        P::pm_resolve_span(unit)
+    }
+
+    #[inline(always)]
+    fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background) {
+        P::pm_resolve_line_rgba8(line, out, bg);
+    }
+
+    fn line_loop<P: Pixel>() -> bool {
+        P::PIXEL_MAJOR_LINE_LOOP
     }
 }
 
@@ -238,13 +246,14 @@ impl Arrangement for Spans {
         }
     }
 
-    fn resolve_rgba8<P: Pixel>(
-        rows: &[Row],
-        d: Dims,
-        out: &mut [[u8; 4]],
-        bg: Background,
-    ) -> Result<(), FramebufferError> {
-        write_spans(d, out, |s, y| Self::resolve_span_rgba8::<P>(rows, d, s, y, bg))
+    #[inline(always)]
+    fn whole<P: Pixel>(unit: &[Row]) -> ResolvedLanes {
+        P::span_resolve(unit)
+    }
+
+    #[inline(always)]
+    fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background) {
+        units::<P, _>(line, out, |s| P::span_resolve_rgba8(s, bg));
     }
 }
 
@@ -342,6 +351,29 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
     }
 }
 
+impl<P: Pixel, L: Arrangement> Grid<'_, P, L> {
+    /// Span `span` of line `y` resolved, clear where it does not exist.
+    fn lanes(&self, span: u32, y: u32) -> ResolvedLanes {
+        L::resolve_span::<P>(self.rows, self.dims, span, y).unwrap_or(CLEAR_LANES)
+    }
+
+    /// Write a whole-frame resolve: whole spans by `whole` on their storage unit, line by line
+    /// (no per-span index maths or bounds checks), partial last spans by `edge`.
+    #[inline(always)]
+    fn write<T: Copy>(
+        &self,
+        out: &mut [T],
+        whole: impl Fn(&[Row], &mut [[T; LANES]]),
+        edge: impl Fn(u32, u32) -> [T; LANES],
+    ) -> Result<(), FramebufferError> {
+        if !L::line_loop::<P>() {
+            return write_spans(self.dims, out, edge);
+        }
+        let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
+        write_lines(self.dims, out, self.rows, line_rows, whole, edge)
+    }
+}
+
 impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     type Arith = P::Arith;
     type Band<'b>
@@ -397,8 +429,20 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         L::resolve_span_rgba8::<P>(self.rows, self.dims, span, y, background)
     }
 
-    fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
-        L::resolve_rgba8::<P>(self.rows, self.dims, out, background)
+    fn resolve_into(&self, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
+        let whole = |line: &[Row], o: &mut [[Vec4; LANES]]| units::<P, _>(line, o, |u| L::whole::<P>(u).pixels(bg));
+        self.write(out, whole, |s, y| self.lanes(s, y).pixels(bg))
+    }
+
+    fn resolve_rgba8(&self, out: &mut [[u8; 4]], bg: Background) -> Result<(), FramebufferError> {
+        let whole = |line: &[Row], o: &mut [[[u8; 4]; LANES]]| L::line_rgba8::<P>(line, o, bg);
+        self.write(out, whole, |s, y| self.resolve_span_rgba8(s, y, bg))
+    }
+
+    fn resolve_rgba16f(&self, out: &mut [[f16; 4]], bg: Background) -> Result<(), FramebufferError> {
+        let px = |r: ResolvedLanes| r.pixels(bg).map(to_rgba16f);
+        let whole = |line: &[Row], o: &mut [[[f16; 4]; LANES]]| units::<P, _>(line, o, |u| px(L::whole::<P>(u)));
+        self.write(out, whole, |s, y| px(self.lanes(s, y)))
     }
 
     fn as_rows(&self) -> &[Row] {

@@ -248,25 +248,29 @@ pub(crate) fn write_spans<T: Copy>(
     Ok(())
 }
 
-/// [`write_spans`] with the whole spans of each line written by `whole(y, spans)` (a
-/// pixel-major framebuffer's own loop over its storage, without a bounds check per span),
-/// the partial last span by `span`.
+/// [`write_spans`] with the whole spans of each line written by `whole` from the line's
+/// `line_rows` rows of `rows` (a framebuffer's own loop, without index maths or a bounds
+/// check per span), the partial last span by `edge`.
 pub(crate) fn write_lines<T: Copy>(
     d: Dims,
     out: &mut [T],
-    mut whole: impl FnMut(&mut [[T; LANES]]),
-    span: impl Fn(u32, u32) -> [T; LANES],
+    rows: &[Row],
+    line_rows: usize,
+    whole: impl Fn(&[Row], &mut [[T; LANES]]),
+    edge: impl Fn(u32, u32) -> [T; LANES],
 ) -> Result<(), FramebufferError> {
-    let width = d.width;
     d.check_output(out.len())?;
-    if width == 0 {
+    if d.width == 0 {
         return Ok(());
     }
-    for (y, line) in out.chunks_exact_mut(width as usize).enumerate() {
+    let lines = out
+        .chunks_exact_mut(d.width as usize)
+        .zip(rows.chunks_exact(line_rows.max(1)));
+    for (y, (line, src)) in lines.enumerate() {
         let (spans, rest) = line.as_chunks_mut::<LANES>();
-        whole(spans);
+        whole(src, spans);
         if !rest.is_empty() {
-            let px = span(spans.len() as u32, y as u32);
+            let px = edge(spans.len() as u32, y as u32);
             rest.copy_from_slice(&px[..rest.len()]);
         }
     }
@@ -274,7 +278,7 @@ pub(crate) fn write_lines<T: Copy>(
 }
 
 /// Resolved lanes of nothing (lanes past the edge, or spans that cannot exist).
-const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
+pub(crate) const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
     color: [[0.0; LANES]; 3],
     transmittance: [1.0; LANES],
 };

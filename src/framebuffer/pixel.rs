@@ -11,7 +11,7 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::Layers;
+use super::{CLEAR_LANES, Layers};
 use crate::arith::{Arithmetic, Unbiased};
 use crate::hybrid::{self, TailFormat};
 use crate::lanes::{self, LANES, ResolvedLanes};
@@ -79,7 +79,6 @@ pub trait Pixel: sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// The whole spans of one line (`line`: its pixels' rows), into `out`.
     #[doc(hidden)]
     fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background);
-
     #[doc(hidden)]
     fn span_clear(span: &mut [Row]);
     #[doc(hidden)]
@@ -150,12 +149,6 @@ fn layers<const N: usize>(rows: &[Row]) -> Option<&[[Row; LANES]; N]> {
 fn layers_mut<const N: usize>(rows: &mut [Row]) -> Option<&mut [[Row; LANES]; N]> {
     rows.as_chunks_mut::<LANES>().0.try_into().ok()
 }
-
-/// Resolved lanes of nothing (a span that cannot exist).
-const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
-    color: [[0.0; LANES]; 3],
-    transmittance: [1.0; LANES],
-};
 
 impl<const M: usize, A: Arithmetic> Mlab<M, A> {
     /// The 8 pixels of `px` as arrays, when all 8 are there.

@@ -42,7 +42,7 @@
 //!     alpha: [0.6; 8],
 //!     depth: [1.0, 2.0, 3.0, f32::NAN, 5.0, 6.0, 7.0, 8.0],
 //! };
-//! let invalid = lanes::mlab_insert_fragments(&mut span, &frags, 0b0111_1111);
+//! let invalid = lanes::mlab_insert_fragments_with::<mlab::Unbiased, 4>(&mut span, &frags, 0b0111_1111);
 //! assert_eq!(invalid, 0b0000_1000); // lane 3 has a NaN depth: untouched, reported
 //! assert_eq!(span[0][7], Row::EMPTY); // lane 7 was off
 //! assert_eq!(span[0][0], Row::new([102, 0, 0], 102, 1.0)); // 0.4 and 0.6 are exact bytes
@@ -95,12 +95,6 @@ impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
     }
 }
 
-/// Listing 1 on 8 pixels in the default arithmetic ([`Unbiased`]): see [`mlab_insert_with`].
-#[inline]
-pub fn mlab_insert<const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
-    mlab_insert_with::<Unbiased, M>(span, rows, mask);
-}
-
 /// Listing 1 on 8 pixels in the arithmetic `A`: insert `rows[lane]` into pixel `lane` for
 /// every lane whose bit is set in `mask`. Byte-identical to
 /// [`crate::mlab::insert_with`]`::<A, M>` on each lane, for any rows.
@@ -124,7 +118,7 @@ pub fn hybrid_insert<const K: usize, A: Arithmetic>(span: &mut HybridSpan<K, A>,
 /// [`hybrid_insert`] on a span stored as separate head layers and tails (as in a
 /// [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer)); the tail type picks the layout.
 #[inline]
-pub fn hybrid_insert_parts<T: TailFormat, const K: usize>(
+pub(crate) fn hybrid_insert_parts<T: TailFormat, const K: usize>(
     head: &mut [[Row; LANES]; K],
     tails: &mut [T; LANES],
     rows: &[Row; LANES],
@@ -173,18 +167,8 @@ impl From<InvalidLanes> for u8 {
     }
 }
 
-/// Validate, quantize and insert (Listing 1) one fragment per lane in the default
-/// arithmetic; returns the lanes that were on but invalid (left untouched).
-#[inline]
-pub fn mlab_insert_fragments<const M: usize>(
-    span: &mut MlabSpan<M>,
-    fragments: &FragmentLanes,
-    mask: u8,
-) -> InvalidLanes {
-    mlab_insert_fragments_with::<Unbiased, M>(span, fragments, mask)
-}
-
-/// [`mlab_insert_fragments`] in the arithmetic `A`.
+/// Validate, quantize and insert (Listing 1) one fragment per lane in the arithmetic `A`;
+/// returns the lanes that were on but invalid (left untouched).
 #[inline]
 pub fn mlab_insert_fragments_with<A: Arithmetic, const M: usize>(
     span: &mut MlabSpan<M>,
@@ -285,7 +269,7 @@ pub fn hybrid_resolve_rgba8<const K: usize, A: Arithmetic>(
 
 /// [`hybrid_resolve_rgba8`] on separate head layers and tails.
 #[inline(always)]
-pub fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
+pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
     background: Background,
@@ -295,7 +279,7 @@ pub fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
 
 /// [`hybrid_resolve`] on separate head layers and tails.
 #[inline]
-pub fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
+pub(crate) fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
 ) -> ResolvedLanes {

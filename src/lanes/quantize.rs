@@ -1,7 +1,7 @@
 //! Lane quantization: eight fragments (structure of arrays) validated and quantized to rows
 //! as [`crate::Fragment`]'s constructors and [`Arithmetic::quantize`] do lane by lane.
 
-use crate::arith::{Arithmetic, Unbiased};
+use crate::arith::Arithmetic;
 use crate::row::Row;
 
 use super::LANES;
@@ -9,13 +9,13 @@ use super::x8;
 
 /// Eight fragments, structure of arrays, linear color: premultiplied for
 /// [`quantize`](Self::quantize) and the `insert_*_fragments` functions, straight for
-/// [`quantize_straight`](Self::quantize_straight) (and
+/// [`quantize_straight_with`](Self::quantize_straight_with) (and
 /// [`Framebuffer::insert_span_straight`](crate::Framebuffer::insert_span_straight)).
 ///
 /// ```
 /// use mlab::lanes::FragmentLanes;
 /// let straight = FragmentLanes::from_rgba([[1.0, 0.5, 0.0, 0.5]; 8], [2.0; 8]);
-/// let q = straight.quantize_straight(0xff);
+/// let q = straight.quantize_straight_with::<mlab::Unbiased>(0xff);
 /// assert_eq!(q.valid, 0xff);
 /// let pre = FragmentLanes::from_fn(|lane| ([0.5, 0.25, 0.0], 0.5, 2.0 + lane as f32));
 /// assert_eq!(pre.depth[7], 9.0);
@@ -68,22 +68,6 @@ impl FragmentLanes {
         out
     }
 
-    /// Up to eight fragments from slices of `[R, G, B, A]` and depths (the shorter length
-    /// counts); returns the lanes and the mask of the lanes filled (`(1 << n) - 1`). Lanes
-    /// past the slices are [`TRANSPARENT`](Self::TRANSPARENT) and off.
-    pub fn from_slices(rgba: &[[f32; 4]], depth: &[f32]) -> (FragmentLanes, u8) {
-        let n = rgba.len().min(depth.len()).min(LANES);
-        let mut out = FragmentLanes::TRANSPARENT;
-        for (lane, (c, z)) in rgba.iter().zip(depth).take(n).enumerate() {
-            for (ch, v) in out.color.iter_mut().zip(c) {
-                ch[lane] = *v;
-            }
-            out.alpha[lane] = c[3];
-            out.depth[lane] = *z;
-        }
-        (out, ((1u16 << n) - 1) as u8)
-    }
-
     /// Eight fully transparent black fragments at depth 0 (valid; a placeholder for lanes
     /// that are off).
     pub const TRANSPARENT: FragmentLanes = FragmentLanes {
@@ -92,22 +76,10 @@ impl FragmentLanes {
         depth: [0.0; LANES],
     };
 
-    /// Validate and quantize premultiplied fragments in the default arithmetic
-    /// ([`Unbiased`]): see [`quantize_with`](Self::quantize_with).
-    pub fn quantize(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<Unbiased>(mask, false)
-    }
-
     /// Validate and quantize premultiplied fragments as [`crate::Fragment::premultiplied`]
     /// then [`Arithmetic::quantize`] would, lane by lane.
     pub fn quantize_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
         self.quantize_impl::<A>(mask, false)
-    }
-
-    /// Validate and quantize straight-color fragments in the default arithmetic: see
-    /// [`quantize_straight_with`](Self::quantize_straight_with).
-    pub fn quantize_straight(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<Unbiased>(mask, true)
     }
 
     /// Validate and quantize straight-color fragments, as [`crate::Fragment::straight`] then
