@@ -54,17 +54,14 @@ pub(crate) enum Kind {
     Unbiased,
 }
 
-mod sealed {
-    pub trait Sealed {}
-    impl Sealed for super::Paper {}
-    impl Sealed for super::Unbiased {}
-}
+impl crate::sealed::Sealed for Paper {}
+impl crate::sealed::Sealed for Unbiased {}
 
 /// The arithmetic of the merge, of fragment quantization and of the HT tail: [`Paper`] or
 /// [`Unbiased`] (see the [module docs](self)). Sealed: the kernel's lane code implements
 /// exactly these two.
 pub trait Arithmetic:
-    sealed::Sealed + Copy + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
+    crate::sealed::Sealed + Copy + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
 {
     /// `"paper"` or `"unbiased"`.
     const NAME: &'static str;

@@ -128,11 +128,6 @@ impl<const K: usize, A: Arithmetic> Hybrid<K, A> {
         self.tail
     }
 
-    /// Reset.
-    pub fn clear(&mut self) {
-        *self = Self::new();
-    }
-
     /// Insert a validated fragment with Listing 2 (quantized once, by `A`).
     #[inline]
     pub fn insert(&mut self, fragment: &Fragment) {

@@ -169,6 +169,12 @@ mod tail;
 mod unorm;
 mod vector;
 
+/// The supertrait that keeps [`Arithmetic`], [`TailFormat`], [`framebuffer::Pixel`] and
+/// [`framebuffer::Arrangement`] closed: their lane code implements exactly the kernel's types.
+mod sealed {
+    pub trait Sealed {}
+}
+
 pub use arith::{Arithmetic, Paper, Unbiased};
 pub use batch::SpanBatcher;
 pub use error::Error;

@@ -37,21 +37,6 @@ impl<const M: usize> AtLeastOne<M> {
     pub(crate) const OK: () = assert!(M >= 1, "an MLAB blending array needs at least one row (M >= 1)");
 }
 
-/// Merge two neighbouring rows (Eq. 7 and 8) in the arithmetic `A`: `front` is nearer,
-/// `A = A_front + A_back * T_front` per channel (saturating at 255), `T = T_front * T_back`,
-/// `z = z_front`, each product rounded as `A` says ([`crate::arith`]).
-///
-/// ```
-/// use mlab::{Paper, Row, mlab::merge_with};
-/// let front = Row::new([100, 0, 0], 128, 1.0);
-/// let back = Row::new([0, 200, 0], 0, 2.0);
-/// assert_eq!(merge_with::<Paper>(front, back), Row::new([100, 100, 0], 0, 1.0));
-/// ```
-#[inline(always)]
-pub fn merge_with<A: Arithmetic>(front: Row, back: Row) -> Row {
-    A::merge(front, back)
-}
-
 /// Listing 1 on a blending array of `M` rows in the arithmetic `A`: insert `row`, then
 /// merge the last two rows.
 ///
@@ -140,11 +125,6 @@ impl<const M: usize, A: Arithmetic> BlendingArray<M, A> {
     /// The rows, front to back.
     pub const fn rows(&self) -> &[Row; M] {
         &self.rows
-    }
-
-    /// Reset to empty rows.
-    pub fn clear(&mut self) {
-        self.rows = [Row::EMPTY; M];
     }
 
     /// Insert a validated fragment (quantized here, once, by `A`) with Listing 1.

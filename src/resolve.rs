@@ -106,7 +106,7 @@ impl Resolved {
 
     /// Premultiplied RGBA for compositing later: `(color, 1 - transmittance)`.
     #[inline]
-    pub fn premultiplied(self) -> Vec4 {
+    fn premultiplied(self) -> Vec4 {
         self.color.extend(1.0 - self.transmittance)
     }
 

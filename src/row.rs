@@ -85,13 +85,13 @@ impl Row {
 
     /// The row as one little-endian `u64` (`word0 | word1 << 32`).
     #[inline(always)]
-    pub const fn to_le_u64(self) -> u64 {
+    pub(crate) const fn to_le_u64(self) -> u64 {
         u64::from_le_bytes(self.to_bytes())
     }
 
     /// The row from one little-endian `u64` (`word0 | word1 << 32`).
     #[inline(always)]
-    pub const fn from_le_u64(v: u64) -> Row {
+    pub(crate) const fn from_le_u64(v: u64) -> Row {
         Row::from_bytes(v.to_le_bytes())
     }
 

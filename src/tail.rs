@@ -20,7 +20,7 @@ pub(crate) enum Layout {
 /// What both HT tails offer ([`Tail`], the default, and [`PaperTail`]): exact saturating
 /// integer sums over the fragments that left the head, in units of `1/255`. Sealed.
 pub trait TailFormat:
-    sealed::Sealed + Pod + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
+    crate::sealed::Sealed + Pod + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
 {
     /// No fragment accumulated (all bits zero).
     const EMPTY: Self;
@@ -99,11 +99,8 @@ pub trait TailFormat:
     }
 }
 
-mod sealed {
-    pub trait Sealed {}
-    impl Sealed for super::Tail {}
-    impl Sealed for super::PaperTail {}
-}
+impl crate::sealed::Sealed for Tail {}
+impl crate::sealed::Sealed for PaperTail {}
 
 /// The paper's 8-byte tail of Hybrid Transparency ([`Paper`](crate::Paper) arithmetic).
 ///
@@ -127,7 +124,7 @@ mod sealed {
 /// use mlab::{Row, TailFormat, hybrid::PaperTail};
 /// let mut tail = PaperTail::EMPTY;
 /// tail.add(Row::new([255, 2, 3], 128, 5.0));
-/// assert_eq!(tail.words(), [255 | 2 << 10 | 3 << 20, 127 | 1 << 16]);
+/// assert_eq!(Row::from_bytes(tail.to_bytes()).words(), [255 | 2 << 10 | 3 << 20, 127 | 1 << 16]);
 /// assert_eq!(tail.to_bytes(), [0xff, 0x08, 0x30, 0x00, 0x7f, 0x00, 0x01, 0x00]);
 /// ```
 #[repr(C, align(8))]
@@ -149,7 +146,7 @@ pub(crate) const TAIL_COUNT_MAX: u32 = 65535;
 
 impl PaperTail {
     /// The tail from its two little-endian words.
-    pub const fn from_words(words: [u32; 2]) -> PaperTail {
+    pub(crate) const fn from_words(words: [u32; 2]) -> PaperTail {
         PaperTail {
             word0: words[0].to_le_bytes(),
             word1: words[1].to_le_bytes(),
@@ -157,7 +154,7 @@ impl PaperTail {
     }
 
     /// The two words (layout in the [type docs](PaperTail)).
-    pub const fn words(self) -> [u32; 2] {
+    pub(crate) const fn words(self) -> [u32; 2] {
         [u32::from_le_bytes(self.word0), u32::from_le_bytes(self.word1)]
     }
 
@@ -269,17 +266,6 @@ impl Tail {
     /// The tail from one little-endian `u64`.
     pub(crate) const fn from_le_u64(v: u64) -> Tail {
         Tail { bytes: v.to_le_bytes() }
-    }
-
-    /// The two little-endian words (`word0` = bits 0..32).
-    pub const fn words(self) -> [u32; 2] {
-        let v = self.to_le_u64();
-        [v as u32, (v >> 32) as u32]
-    }
-
-    /// The tail from its two little-endian words.
-    pub const fn from_words(words: [u32; 2]) -> Tail {
-        Tail::from_le_u64(words[0] as u64 | (words[1] as u64) << 32)
     }
 
     #[inline(always)]

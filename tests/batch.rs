@@ -47,7 +47,7 @@ fn stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<(u32, u32, Item)> {
     while out.len() < n {
         let item = |rng: &mut Rng| {
             if rng.below(16) == 0 {
-                return Item::Row(Row::from_le_u64(rng.next_u64()));
+                return Item::Row(Row::from_bytes(rng.next_u64().to_le_bytes()));
             }
             let z = if rng.below(4) == 0 { 1.0 } else { 10.0 * rng.unit() };
             let alpha = if rng.below(4) == 0 {

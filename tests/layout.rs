@@ -30,14 +30,17 @@ fn paper_tail_layout_is_pinned() {
     assert_eq!(core::mem::align_of::<PaperTail>(), 8);
     let t = PaperTail::from_sums([1023, 0x155, 1], 0xbeef, 0x1234);
     // word0 = R | G << 10 | B << 20, word1 = alpha | count << 16, little-endian.
-    assert_eq!(t.words(), [1023 | 0x155 << 10 | 1 << 20, 0x1234_beef]);
+    assert_eq!(
+        mlab::Row::from_bytes(t.to_bytes()).words(),
+        [1023 | 0x155 << 10 | 1 << 20, 0x1234_beef]
+    );
     assert_eq!(t.to_bytes(), [0xff, 0x57, 0x15, 0x00, 0xef, 0xbe, 0x34, 0x12]);
     assert_eq!(bytemuck::bytes_of(&t), &t.to_bytes());
     assert_eq!(PaperTail::EMPTY.to_bytes(), [0; 8]);
     assert_eq!(PaperTail::from_bytes(t.to_bytes()), t);
     // Fields saturate at construction.
     assert_eq!(
-        PaperTail::from_sums([5000, 0, 0], 1 << 20, 1 << 20).words(),
+        mlab::Row::from_bytes(PaperTail::from_sums([5000, 0, 0], 1 << 20, 1 << 20).to_bytes()).words(),
         [1023, 0xffff_ffff]
     );
 }
@@ -51,7 +54,7 @@ fn tail_layout_is_pinned() {
     let t = Tail::from_sums([0x1abc, 0x155, 0x1001], 0x2fed, 0x587);
     assert_eq!(u64::from_le_bytes(t.to_bytes()), 0xb0f7_f6c0_042a_babc);
     assert_eq!(t.to_bytes(), [0xbc, 0xba, 0x2a, 0x04, 0xc0, 0xf6, 0xf7, 0xb0]);
-    assert_eq!(t.words(), [0x042a_babc, 0xb0f7_f6c0]);
+    assert_eq!(mlab::Row::from_bytes(t.to_bytes()).words(), [0x042a_babc, 0xb0f7_f6c0]);
     assert_eq!(bytemuck::bytes_of(&t), &t.to_bytes());
     assert_eq!(Tail::EMPTY.to_bytes(), [0; 8]);
     assert_eq!(Tail::from_bytes(t.to_bytes()), t);

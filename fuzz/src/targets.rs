@@ -326,8 +326,8 @@ pub fn check_layout(b: [u8; 8]) {
     // The paper's tail: two words, spare bits 30..32 of word0.
     let tail = PaperTail::from_bytes(b);
     assert_eq!(tail.to_bytes(), b);
-    assert_eq!(tail.words(), w);
-    assert_eq!(PaperTail::from_words(w), tail);
+    assert_eq!(mlab::Row::from_bytes(tail.to_bytes()).words(), w);
+    assert_eq!(<PaperTail as mlab::TailFormat>::from_bytes(mlab::Row::from_words(w).to_bytes()), tail);
     assert_eq!(
         tail.color_sum(),
         [w[0] & 1023, (w[0] >> 10) & 1023, (w[0] >> 20) & 1023]
@@ -340,8 +340,8 @@ pub fn check_layout(b: [u8; 8]) {
     let wide = mlab::Tail::from_bytes(b);
     assert_eq!(wide.to_bytes(), b);
     assert_eq!(u64::from_le_bytes(wide.to_bytes()), v);
-    assert_eq!(wide.words(), w);
-    assert_eq!(mlab::Tail::from_words(w), wide);
+    assert_eq!(mlab::Row::from_bytes(wide.to_bytes()).words(), w);
+    assert_eq!(<mlab::Tail as mlab::TailFormat>::from_bytes(mlab::Row::from_words(w).to_bytes()), wide);
     check_tail_fields::<Unbiased>(b);
 }
 
@@ -383,7 +383,7 @@ fn tail_fields<T: TailFormat>(t: T) -> [u64; 5] {
 /// and `color <= 255 - T` kept when both rows have it (documented for both arithmetics).
 pub fn check_merges(front: Row, back: Row) {
     assert_eq!(
-        mlab_mod::merge_with::<mlab::Unbiased>(front, back),
+        <mlab::Unbiased as mlab::Arithmetic>::merge(front, back),
         <Unbiased as Model>::ref_merge(front, back),
         "default merge of {front:?}, {back:?}"
     );
@@ -393,7 +393,7 @@ pub fn check_merges(front: Row, back: Row) {
 
 fn check_merge<A: Model>(front: Row, back: Row) {
     let name = A::NAME;
-    let m = mlab_mod::merge_with::<A>(front, back);
+    let m = <A as mlab::Arithmetic>::merge(front, back);
     assert_eq!(m, A::ref_merge(front, back), "{name} merge of {front:?}, {back:?}");
     let [fr, fg, fb, ft] = front.rgbt().map(f64::from);
     let [br, bg, bb, bt] = back.rgbt().map(f64::from);

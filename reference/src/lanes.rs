@@ -8,7 +8,10 @@
 
 use mlab::glam::Vec3;
 use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan, ResolvedLanes};
-use mlab::{Arithmetic, Background, Fragment, Hybrid, Resolved, Row, TailFormat, mlab as listing1, to_rgba8};
+use mlab::{
+    Arithmetic, Background, Fragment, Framebuffer, Hybrid, HybridSpanFramebuffer, Resolved, Row, SpanFramebuffer,
+    TailFormat, mlab as listing1, to_rgba8,
+};
 
 use crate::model::Model;
 
@@ -140,7 +143,7 @@ pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
 /// `quantize_straight_with::<A>` report exactly the lanes of `mask` as valid or invalid,
 /// valid exactly where the scalar constructor accepts, with the scalar row (`A::quantize`)
 /// and the reference row ([`Model::ref_quantize`]); every other lane holds `Row::EMPTY`.
-/// Then `mlab_insert_fragments_with::<A>` (M = 2) and `hybrid_insert_fragments` (K = 1)
+/// Then `Framebuffer::insert_span_fragments` on one span of MLAB (M = 2) and HT (K = 1)
 /// report the invalid lanes and equal the scalar inserts of the valid rows. For the
 /// default arithmetic, `quantize`, `quantize_straight` and `mlab_insert_fragments` give
 /// the same.
@@ -191,14 +194,17 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
             }
         }
     }
-    // The insert_fragments entry points: invalid lanes reported and left untouched.
+    // The span inserts of fragments (`Framebuffer::insert_span_fragments`, one span of 8 x 1
+    // pixels): invalid lanes reported and left untouched.
     let q = fl.quantize_with::<A>(mask);
-    let mut span = [[Row::EMPTY; LANES]; 2];
-    let invalid = lanes::mlab_insert_fragments_with::<A, 2>(&mut span, &fl, mask);
+    let mut storage = vec![Row::EMPTY; 16];
+    let mut fb = SpanFramebuffer::<2, A>::new_cleared(&mut storage, 8, 1).map_err(|e| format!("{e}"))?;
+    let invalid = fb.insert_span_fragments(0, 0, &fl, mask).map_err(|e| format!("{e}"))?;
     ensure!(
         invalid.0 == q.invalid,
-        "mlab_insert_fragments_with: {invalid:?} vs {q:?}"
+        "insert_span_fragments (MLAB): {invalid:?} vs {q:?}"
     );
+    let span: [[Row; LANES]; 2] = core::array::from_fn(|j| core::array::from_fn(|l| fb.as_rows()[j * LANES + l]));
     let mut expected = [[Row::EMPTY; 2]; LANES];
     for (lane, p) in expected.iter_mut().enumerate() {
         if q.valid >> lane & 1 == 1 {
@@ -206,9 +212,18 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
         }
     }
     check_mlab_rows(&span, &expected)?;
-    let mut hspan = HybridSpan::<1, A>::new();
-    let invalid = lanes::hybrid_insert_fragments(&mut hspan, &fl, mask);
-    ensure!(invalid.0 == q.invalid, "hybrid_insert_fragments: {invalid:?} vs {q:?}");
+    let mut storage = vec![Row::EMPTY; 16];
+    let mut fb = HybridSpanFramebuffer::<1, A>::new_cleared(&mut storage, 8, 1).map_err(|e| format!("{e}"))?;
+    let invalid = fb.insert_span_fragments(0, 0, &fl, mask).map_err(|e| format!("{e}"))?;
+    ensure!(
+        invalid.0 == q.invalid,
+        "insert_span_fragments (HT): {invalid:?} vs {q:?}"
+    );
+    let rows = fb.as_rows();
+    let hspan = HybridSpan::<1, A> {
+        head: [core::array::from_fn(|l| rows[l])],
+        tails: core::array::from_fn(|l| <A::Tail as TailFormat>::from_bytes(rows[LANES + l].to_bytes())),
+    };
     let mut hexpected = [Hybrid::<1, A>::new(); LANES];
     for (lane, p) in hexpected.iter_mut().enumerate() {
         if q.valid >> lane & 1 == 1 {
@@ -219,7 +234,7 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
     for lane in (0..LANES).filter(|&l| q.valid >> l & 1 == 0) {
         ensure!(
             hspan.tails[lane] == <A::Tail as TailFormat>::EMPTY && hspan.head[0][lane] == Row::EMPTY,
-            "hybrid_insert_fragments wrote lane {lane}, which is not valid"
+            "insert_span_fragments wrote lane {lane}, which is not valid"
         );
     }
     check_hybrid_span(&hspan, &hexpected)

@@ -15,11 +15,8 @@ use crate::row::Row;
 use glam::Vec4;
 use half::f16;
 
-mod sealed {
-    pub trait Sealed {}
-    impl Sealed for super::PixelMajor {}
-    impl Sealed for super::Spans {}
-}
+impl crate::sealed::Sealed for PixelMajor {}
+impl crate::sealed::Sealed for Spans {}
 
 /// Pixel-major storage: pixel `(x, y)` owns the rows
 /// `[(y * width + x) * R, (y * width + x + 1) * R)`, `R` = [`Pixel::ROWS`] (an HT pixel's last slot holds its tail's bytes).
@@ -34,7 +31,9 @@ pub struct Spans;
 
 /// How the pixels of a [`Grid`] are laid out: [`PixelMajor`] or [`Spans`] (sealed). The
 /// hidden items are the storage layer's index maths.
-pub trait Arrangement: sealed::Sealed + Copy + Debug + Default + Send + Sync + 'static {
+// `Dims` is the crate's own: the trait is sealed, no other crate implements or calls it.
+#[allow(private_interfaces)]
+pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + Sync + 'static {
     /// Whether pixels are stored in 8-pixel layer-major spans.
     const SPANS: bool;
     #[doc(hidden)]
@@ -109,6 +108,7 @@ impl PixelMajor {
     }
 }
 
+#[allow(private_interfaces)]
 impl Arrangement for PixelMajor {
     const SPANS: bool = false;
 
@@ -178,6 +178,7 @@ impl Arrangement for PixelMajor {
     }
 }
 
+#[allow(private_interfaces)]
 impl Arrangement for Spans {
     const SPANS: bool = true;
 

@@ -129,9 +129,8 @@ impl core::fmt::Display for FramebufferError {
 impl core::error::Error for FramebufferError {}
 
 /// Width, height and spans per line, with the checks shared by every framebuffer.
-#[doc(hidden)]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Dims {
+pub(crate) struct Dims {
     pub(crate) width: u32,
     pub(crate) height: u32,
     /// 8-pixel spans per line: `ceil(width / 8)`.
@@ -430,7 +429,7 @@ pub trait Framebuffer {
     /// of its own over its part of the storage, so that threads can own them. Band `b`
     /// covers lines `b * lines ..`; coordinates inside a band are relative to its first
     /// line. `lines == 0`, or an empty framebuffer, yields no band.
-    fn bands_mut(&mut self, lines: u32) -> Bands<Self::Band<'_>> {
+    fn bands_mut(&mut self, lines: u32) -> impl Iterator<Item = Self::Band<'_>> {
         let none = lines == 0 || self.width() == 0 || self.height() == 0;
         Bands {
             rest: if none { None } else { Some(self.reborrow()) },
@@ -452,7 +451,7 @@ pub trait Framebuffer {
 
 /// The bands of a framebuffer ([`Framebuffer::bands_mut`]).
 #[derive(Debug)]
-pub struct Bands<F> {
+struct Bands<F> {
     rest: Option<F>,
     lines: u32,
 }

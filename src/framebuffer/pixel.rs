@@ -19,11 +19,8 @@ use crate::mlab;
 use crate::resolve::{Background, Resolved, resolve_rows};
 use crate::row::Row;
 
-mod sealed {
-    pub trait Sealed {}
-    impl<const M: usize, A: crate::Arithmetic> Sealed for super::Mlab<M, A> {}
-    impl<const K: usize, A: crate::Arithmetic> Sealed for super::Ht<K, A> {}
-}
+impl<const M: usize, A: Arithmetic> crate::sealed::Sealed for Mlab<M, A> {}
+impl<const K: usize, A: Arithmetic> crate::sealed::Sealed for Ht<K, A> {}
 
 /// MLAB with `M` rows per pixel in the arithmetic `A`: a [`Pixel`] kind of a
 /// [`Grid`](super::Grid).
@@ -38,7 +35,7 @@ pub struct Ht<const K: usize, A: Arithmetic = Unbiased>(PhantomData<A>);
 
 /// What one pixel of a [`Grid`](super::Grid) holds: [`Mlab`] or [`Ht`] (sealed). The
 /// hidden items are the storage layer's leaves.
-pub trait Pixel: sealed::Sealed + Copy + Debug + Send + Sync + 'static {
+pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// The arithmetic of the merge, of quantization and of the tail.
     type Arith: Arithmetic;
     /// One pixel's contents, as [`Grid::pixel`](super::Grid::pixel) returns them:

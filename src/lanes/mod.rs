@@ -42,8 +42,10 @@
 //!     alpha: [0.6; 8],
 //!     depth: [1.0, 2.0, 3.0, f32::NAN, 5.0, 6.0, 7.0, 8.0],
 //! };
-//! let invalid = lanes::mlab_insert_fragments_with::<mlab::Unbiased, 4>(&mut span, &frags, 0b0111_1111);
-//! assert_eq!(invalid, 0b0000_1000); // lane 3 has a NaN depth: untouched, reported
+//! let q = frags.quantize_with::<mlab::Unbiased>(0b0111_1111); // validate, quantize
+//! assert_eq!(q.invalid, 0b0000_1000); // lane 3 has a NaN depth: reported, not inserted
+//! lanes::mlab_insert_with::<mlab::Unbiased, 4>(&mut span, &q.rows, q.valid);
+//! assert_eq!(span[0][3], Row::EMPTY);
 //! assert_eq!(span[0][7], Row::EMPTY); // lane 7 was off
 //! assert_eq!(span[0][0], Row::new([102, 0, 0], 102, 1.0)); // 0.4 and 0.6 are exact bytes
 //! ```
@@ -134,26 +136,9 @@ pub(crate) fn hybrid_insert_parts<T: TailFormat, const K: usize>(
 /// The lanes of a span insert of fragments that were on but invalid (NaN, infinite or out
 /// of range, as [`crate::Fragment`]'s constructors refuse them): they were **not** inserted.
 /// Bit `i` = lane `i`. Compares with a `u8` mask (`invalid == 0`).
-#[must_use = "the lanes in this mask were not inserted: check it (`is_empty`) or count them"]
+#[must_use = "the lanes in this mask were not inserted: check it (`== 0`) or count them (`.0.count_ones()`)"]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct InvalidLanes(pub u8);
-
-impl InvalidLanes {
-    /// The mask, bit `i` = lane `i`.
-    pub const fn bits(self) -> u8 {
-        self.0
-    }
-
-    /// No lane was invalid.
-    pub const fn is_empty(self) -> bool {
-        self.0 == 0
-    }
-
-    /// How many lanes were invalid.
-    pub const fn count(self) -> u32 {
-        self.0.count_ones()
-    }
-}
 
 impl PartialEq<u8> for InvalidLanes {
     fn eq(&self, other: &u8) -> bool {
@@ -165,31 +150,6 @@ impl From<InvalidLanes> for u8 {
     fn from(v: InvalidLanes) -> u8 {
         v.0
     }
-}
-
-/// Validate, quantize and insert (Listing 1) one fragment per lane in the arithmetic `A`;
-/// returns the lanes that were on but invalid (left untouched).
-#[inline]
-pub fn mlab_insert_fragments_with<A: Arithmetic, const M: usize>(
-    span: &mut MlabSpan<M>,
-    fragments: &FragmentLanes,
-    mask: u8,
-) -> InvalidLanes {
-    let q = fragments.quantize_with::<A>(mask);
-    mlab_insert_with::<A, M>(span, &q.rows, q.valid);
-    InvalidLanes(q.invalid)
-}
-
-/// Validate, quantize and insert (Listing 2) one fragment per lane; returns the invalid lanes.
-#[inline]
-pub fn hybrid_insert_fragments<const K: usize, A: Arithmetic>(
-    span: &mut HybridSpan<K, A>,
-    fragments: &FragmentLanes,
-    mask: u8,
-) -> InvalidLanes {
-    let q = fragments.quantize_with::<A>(mask);
-    hybrid_insert(span, &q.rows, q.valid);
-    InvalidLanes(q.invalid)
 }
 
 /// The resolve of 8 pixels, structure of arrays; lane `i` equals the scalar [`Resolved`]
