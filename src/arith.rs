@@ -9,8 +9,8 @@
 //!
 //! | | [`Paper`] | [`Unbiased`] (default) |
 //! |---|---|---|
-//! | merge products (Eq. 7-8) | `round(a * b / 255)` | `floor((a * b + d) / 255)`, `d` = [`merge_dither`] in `0..=254` |
-//! | fragment quantization | `floor(v * 255 + 0.5)` | the same, except faint fragments (`alpha * 255 < 16`): `floor(v * 255 + u)`, `u` = [`fragment_dither`] |
+//! | merge products (Eq. 7-8) | `round(a * b / 255)` | `floor((a * b + d) / 255)`, `d` = the merge dither in `0..=254` (`docs/layout.md`) |
+//! | fragment quantization | `floor(v * 255 + 0.5)` | the same, except faint fragments (`alpha * 255 < 16`): `floor(v * 255 + u)`, `u` = the fragment dither (`docs/layout.md`) |
 //! | HT tail | [`PaperTail`]: colors 3 x 10 bit, alpha 16, count 16 | [`Tail`]: colors 3 x 13 bit, alpha 14, count 11 |
 //!
 //! # Why
@@ -73,7 +73,7 @@ pub trait Arithmetic:
     /// The HT tail of this arithmetic.
     type Tail: TailFormat;
 
-    /// Merge two neighbouring rows (Eq. 7-8), `front` nearer: see [`crate::mlab::merge`].
+    /// Merge two neighbouring rows (Eq. 7-8), `front` nearer: see [`crate::mlab::insert_with`] and the [module docs](self).
     fn merge(front: Row, back: Row) -> Row;
 
     /// Quantize a validated fragment into a row.
@@ -124,6 +124,10 @@ impl Arithmetic for Unbiased {
     /// `T = floor((T_front * T_back + d) / 255)`,
     /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255.
     #[inline(always)]
+    #[expect(
+        clippy::cast_possible_truncation,
+        reason = "floor((a * b + d) / 255) <= 255 for bytes a, b and d <= 254"
+    )]
     fn merge(front: Row, back: Row) -> Row {
         let [ar, ag, ab, at] = front.rgbt();
         let [br, bg, bb, bt] = back.rgbt();
@@ -134,9 +138,9 @@ impl Arithmetic for Unbiased {
         Row::new([add(ar, br), add(ag, bg), add(ab, bb)], t, front.depth())
     }
 
-    /// To nearest, as the paper's ([`Fragment::row`]), except for faint fragments
+    /// To nearest, as the paper's ([`Paper::quantize`](Arithmetic::quantize)), except for faint fragments
     /// (`alpha * 255 < 16`, where half a unit of rounding is more than 3 % of the value),
-    /// which are quantized with [`quantize_dithered`].
+    /// which are quantized with the fragment dither (`docs/layout.md`).
     ///
     /// Why only those (measured with `oit-lab faint`, 3 seeds, `docs/quality.md`): dithering
     /// every fragment doubles the quantization noise, which cost up to 1.1 dB on scenes that
@@ -197,6 +201,11 @@ pub(crate) fn fragment_dither(color: [f32; 3], alpha: f32, depth: f32) -> f32 {
 /// A byte from a value in `[0, 1]` and a dither `u` in `(0, 1)`: `floor(v * 255 + u)` in f32
 /// (multiply, then add, each rounded; truncation).
 #[inline(always)]
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "v in [0, 1], u in (0, 1): v * 255 + u in [0, 256), truncated to a byte as specified"
+)]
 pub(crate) fn quantize_with_dither(v: f32, u: f32) -> u8 {
     (v * 255.0 + u) as u8
 }

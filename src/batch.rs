@@ -64,7 +64,7 @@
 
 use crate::fragment::Fragment;
 use crate::framebuffer::{Framebuffer, FramebufferError};
-use crate::lanes::{FragmentLanes, LANES};
+use crate::lanes::{FragmentLanes, LANES, LANES_U32};
 use crate::row::Row;
 
 /// log2 of the spans per line of the batcher's window.
@@ -151,7 +151,7 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
                 height: self.height,
             });
         }
-        let sx = x / LANES as u32;
+        let sx = x / LANES_U32;
         let lane = x as usize % LANES;
         let bit = 1u8 << lane;
         let key = (y as u64) << 32 | sx as u64;
@@ -179,8 +179,9 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
 
     /// Quantize and insert one pending span, and mark it empty.
     #[inline]
+    #[expect(clippy::cast_possible_truncation, reason = "the key packs two u32: y << 32 | x / 8")]
     fn flush_slot(fb: &mut F, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
-        let (x, y) = ((key as u32) * LANES as u32, (key >> 32) as u32);
+        let (x, y) = ((key as u32) * LANES_U32, (key >> 32) as u32);
         let fragments = slot.mask & !slot.rows;
         // Every lane pushed as a fragment holds a validated `Fragment`: no lane is invalid.
         let mut q = slot.fragments.quantize_validated_with::<F::Arith>(fragments);

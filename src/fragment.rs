@@ -48,7 +48,7 @@ impl core::error::Error for FragmentError {}
 /// A validated transparent fragment: premultiplied linear color, alpha (coverage) and depth.
 ///
 /// Colors are **linear** (not sRGB-encoded): convert sRGB texture or vertex colors to
-/// linear before building a fragment. Constructors take glam's [`Vec3`]/[`Vec4`] (the
+/// linear before building a fragment. Constructors take glam's [`Vec3`] (the
 /// `glam` re-exported as `mlab::glam`) or plain arrays (`*_rgb`, `*_rgba`), so a renderer on
 /// another glam version passes `v.to_array()`.
 ///

@@ -19,7 +19,7 @@
 //! floating point, and a shader reproduces them bit for bit. Merging with the empty row is
 //! the identity in both, so an array that is not full needs no special case.
 //!
-//! Invariants kept by [`insert`] for any stream of valid fragments (finite depth): rows
+//! Invariants kept by [`insert_with`] for any stream of valid fragments (finite depth): rows
 //! sorted by depth front to back (non-decreasing `z`), rows at `z = +infinity` are
 //! [`Row::EMPTY`] and only at the back.
 
@@ -113,7 +113,7 @@ impl<const M: usize, A: Arithmetic> BlendingArray<M, A> {
     }
 
     /// An array over given rows (for example read back from a GPU buffer). Any rows are
-    /// accepted; see [`insert`] for what unsorted rows do.
+    /// accepted; see [`insert_with`] for what unsorted rows do.
     pub const fn from_rows(rows: [Row; M]) -> Self {
         let () = AtLeastOne::<M>::OK;
         BlendingArray {

@@ -269,11 +269,13 @@ impl Tail {
     }
 
     #[inline(always)]
+    #[expect(clippy::cast_possible_truncation, reason = "masked to at most 14 bits")]
     const fn field(self, shift: u32, max: u64) -> u32 {
         ((self.to_le_u64() >> shift) & max) as u32
     }
 }
 
+#[expect(clippy::cast_possible_truncation, reason = "the field maxima are below 2^14")]
 impl TailFormat for Tail {
     const EMPTY: Tail = Tail { bytes: [0; 8] };
     #[allow(private_interfaces)]

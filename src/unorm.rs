@@ -28,6 +28,7 @@ pub(crate) const fn div255(x: u32) -> u32 {
 /// `mul(a, 255) == a` and `mul(a, 0) == 0` for every `a`, so merging a row with the empty
 /// row (or with an opaque one) is exact.
 #[inline(always)]
+#[expect(clippy::cast_possible_truncation, reason = "round(a * b / 255) <= 255 for bytes")]
 pub(crate) const fn mul(a: u8, b: u8) -> u8 {
     // The result is at most 255: no truncation.
     div255(a as u32 * b as u32) as u8
@@ -49,6 +50,11 @@ pub(crate) const fn div255_floor(y: u32) -> u32 {
 /// contracts them into an FMA). Out-of-range and NaN inputs saturate (`as` casts from
 /// float saturate and map NaN to 0), but validated fragments never produce them.
 #[inline(always)]
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "v in [0, 1]: v * 255 + 0.5 in [0.5, 255.5], truncated as specified"
+)]
 pub(crate) fn quantize(v: f32) -> u8 {
     (v * 255.0 + 0.5) as u8
 }

@@ -9,7 +9,7 @@ use core::marker::PhantomData;
 
 use super::pixel::Pixel;
 use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
-use crate::lanes::{LANES, ResolvedLanes};
+use crate::lanes::{LANES, LANES_U32, ResolvedLanes};
 use crate::resolve::{Background, Resolved, to_rgba16f};
 use crate::row::Row;
 use glam::Vec4;
@@ -101,9 +101,7 @@ impl PixelMajor {
     /// Pixel index of the first pixel of span `span` of line `y` and the pixels of it inside.
     #[inline(always)]
     fn span_start(d: Dims, span: u32, y: u32) -> Option<(usize, usize)> {
-        let x = span
-            .checked_mul(LANES as u32)
-            .filter(|&x| x < d.width && y < d.height)?;
+        let x = span.checked_mul(LANES_U32).filter(|&x| x < d.width && y < d.height)?;
         Some((d.index_unchecked(x, y), d.lanes_inside(x)))
     }
 }
@@ -215,6 +213,10 @@ impl Arrangement for Spans {
     /// A span at `x` not a multiple of 8 touches two stored spans: lane `i` lands on lane
     /// `(i + x % 8) % 8`, of the first if `i + x % 8 < 8`, of the next one otherwise.
     #[inline(always)]
+    #[expect(
+        clippy::cast_possible_truncation,
+        reason = "the two bytes of the mask shifted into 16 bits"
+    )]
     fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8) {
         let (i, shift) = d.span_lane(x, y);
         let wide = (mask as u16) << shift;

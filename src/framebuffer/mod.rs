@@ -192,6 +192,7 @@ impl Dims {
     /// Check a span operation at `(x, y)` with `mask`: every lane that is on lies inside (a
     /// zero mask touches no pixel and may lie anywhere on a valid line).
     #[inline(always)]
+    #[expect(clippy::cast_possible_truncation, reason = "clamped to u32::MAX first")]
     pub(crate) fn check_span(self, x: u32, y: u32, mask: u8) -> Result<(), FramebufferError> {
         if y >= self.height {
             return Err(self.out_of_bounds(x, y));
@@ -220,6 +221,10 @@ impl Dims {
 
 /// Write the 8 lanes of each span (`span(span_index_in_line, y)`) into a row-major output
 /// of `width * height` pixels, dropping lanes past the right edge.
+#[expect(
+    clippy::cast_possible_truncation,
+    reason = "span and line indices are below the u32 width and height"
+)]
 pub(crate) fn write_spans<T: Copy>(
     d: Dims,
     out: &mut [T],
@@ -250,6 +255,10 @@ pub(crate) fn write_spans<T: Copy>(
 /// [`write_spans`] with the whole spans of each line written by `whole` from the line's
 /// `line_rows` rows of `rows` (a framebuffer's own loop, without index maths or a bounds
 /// check per span), the partial last span by `edge`.
+#[expect(
+    clippy::cast_possible_truncation,
+    reason = "span and line indices are below the u32 width and height"
+)]
 pub(crate) fn write_lines<T: Copy>(
     d: Dims,
     out: &mut [T],
@@ -408,7 +417,7 @@ pub trait Framebuffer {
         })
     }
 
-    /// Resolve every pixel into RGBA8 ([`to_rgba8`]: linear unorm8, not sRGB), row-major.
+    /// Resolve every pixel into RGBA8 ([`to_rgba8`](crate::to_rgba8): linear unorm8, not sRGB), row-major.
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
         write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
             self.resolve_span_rgba8(s, y, background)

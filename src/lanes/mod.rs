@@ -51,6 +51,8 @@
 //! ```
 
 mod quantize;
+// The lane helpers narrow lanes whose range their comments state (bytes of 16-bit slots).
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
 mod x8;
 
 use crate::arith::{Arithmetic, Unbiased};
@@ -65,6 +67,10 @@ pub use x8::BACKEND;
 
 /// Pixels per lane group.
 pub const LANES: usize = 8;
+
+/// [`LANES`] as a `u32` (pixel coordinates are `u32`).
+#[expect(clippy::cast_possible_truncation, reason = "8")]
+pub(crate) const LANES_U32: u32 = LANES as u32;
 
 /// An MLAB span: 8 pixels with `M` rows each, layer-major (`span[j][lane]` is row `j` of
 /// pixel `lane`).

@@ -8,7 +8,7 @@ use super::LANES;
 use super::x8;
 
 /// Eight fragments, structure of arrays, linear color: premultiplied for
-/// [`quantize`](Self::quantize) and the `insert_*_fragments` functions, straight for
+/// [`quantize_with`](Self::quantize_with) and `Framebuffer::insert_span_fragments`, straight for
 /// [`quantize_straight_with`](Self::quantize_straight_with) (and
 /// [`Framebuffer::insert_span_straight`](crate::Framebuffer::insert_span_straight)).
 ///
