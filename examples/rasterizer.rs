@@ -10,10 +10,11 @@
 //! ```
 //!
 //! Writes `out/rasterizer.png`: the kernel's image on the left, the A-buffer's on the right.
+//! Needs `mlab` and `png` (and `examples/common/raster.rs`, the rasterizer) only: copy it
+//! into a crate of your own as it is.
 //! Colors are linear throughout; the PNG is sRGB-encoded at the end, for display only.
 
 use mlab::{Background, DynFramebuffer, Fragment, Framebuffer, Layers, Row, SpanBatcher};
-use mlab_reference::{Layer, oracle};
 
 #[path = "common/raster.rs"]
 mod raster;
@@ -33,9 +34,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // The kernel's framebuffer: storage is ours, the view checks every size.
     let mut storage = vec![Row::EMPTY; layers.rows_needed(W, H)?];
     let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut storage, W, H)?;
-    // The exact answer: every fragment of every pixel (premultiplied color, alpha, depth),
-    // composited by the f64 oracle the tests use (`mlab-reference`).
-    let mut abuffer: Vec<Vec<Layer>> = vec![Vec::new(); (W * H) as usize];
+    // The exact answer: every fragment of every pixel (premultiplied color, alpha, depth), in
+    // submission order, sorted and composited in f64 at the end (`exact` below).
+    let mut abuffer: Vec<Vec<Fragment>> = vec![Vec::new(); (W * H) as usize];
 
     let mesh = raster::scene(W, H, 96, 48);
     let mut covered = Vec::new();
@@ -48,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             // Straight linear color; the kernel premultiplies and quantizes it.
             let f = Fragment::straight_rgb(t.color, t.alpha, z)?;
             batch.insert(x, y, &f)?;
-            abuffer[(y * W + x) as usize].push(Layer::from(f));
+            abuffer[(y * W + x) as usize].push(f);
             fragments += 1;
         }
     }
@@ -56,10 +57,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let mut image = vec![mlab::glam::Vec4::ZERO; (W * H) as usize];
     fb.resolve_into(&mut image, Background::Opaque(BACKGROUND.into()))?;
-    let exact: Vec<[f64; 3]> = abuffer
-        .iter()
-        .map(|frags| oracle(frags, BACKGROUND.map(f64::from)).0)
-        .collect();
+    let exact: Vec<[f64; 3]> = abuffer.iter().map(|frags| exact(frags)).collect();
 
     let mse = image
         .iter()
@@ -95,6 +93,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     writer.finish()?;
     println!("wrote out/rasterizer.png (left: kernel, right: A-buffer)");
     Ok(())
+}
+
+/// The exact composite of one pixel's fragments (in submission order) over the background,
+/// in f64: sorted front to back, and at equal depth **the later fragment in front**, the
+/// kernel's rule (Listing 1's `<=`: a new fragment goes in front of rows at its depth, so
+/// coplanar fragments blend like OVER in submission order). A stable sort by depth alone
+/// puts the earlier one in front and differs from the kernel wherever depths tie.
+fn exact(fragments: &[Fragment]) -> [f64; 3] {
+    let mut order: Vec<usize> = (0..fragments.len()).collect();
+    order.sort_by(|&a, &b| fragments[a].depth().total_cmp(&fragments[b].depth()).then(b.cmp(&a)));
+    let (mut color, mut visible) = ([0.0f64; 3], 1.0f64);
+    for f in order.iter().map(|&i| fragments[i]) {
+        for (c, p) in color.iter_mut().zip(f.color().to_array()) {
+            *c += f64::from(p) * visible;
+        }
+        visible *= 1.0 - f64::from(f.alpha());
+    }
+    core::array::from_fn(|c| color[c] + visible * f64::from(BACKGROUND[c]))
 }
 
 /// Linear `[0, 1]` to an sRGB-encoded byte (display only).

@@ -1,8 +1,8 @@
 //! The span batcher: fragments pushed one pixel at a time become 8-pixel span inserts.
 //!
 //! Rasterizers such as a scanline or tile rasterizer emit one fragment at a time. The lanes
-//! insert 8 pixels of a line at once, 3-8x faster per fragment than one pixel at a time
-//! (`docs/performance.md`), but only if something gathers the fragments into spans. A
+//! insert 8 pixels of a line at once, several times faster per fragment than one pixel at a
+//! time (`docs/performance.md`), but only if something gathers the fragments into spans. A
 //! [`SpanBatcher`] does, over any [`Framebuffer`]:
 //!
 //! ```text
@@ -27,20 +27,17 @@
 //!
 //! Coordinates are checked when a fragment is pushed, so flushes cannot fail.
 //!
-//! Measured (`docs/performance.md`, `benches/batch.rs`): for MLAB `M = 4` into a
-//! [`SpanFramebuffer`](crate::SpanFramebuffer), 2.1-2.6x faster than per-pixel inserts into an
-//! [`MlabFramebuffer`](crate::MlabFramebuffer) on x86-64-v3 and 1.7-2.0x on SSE2; for HT `K = 3`
-//! into a [`HybridSpanFramebuffer`](crate::HybridSpanFramebuffer), 1.0-1.3x on x86-64-v3 and
-//! 1.1-1.4x on SSE2 (per-pixel HT, with no merge, is cheap already). Into the pixel-major
-//! [`HybridFramebuffer`](crate::HybridFramebuffer) span inserts were slower than per-pixel
-//! inserts (0.75-0.88x), so there the batcher passes each fragment straight through
-//! ([`Framebuffer::SPAN_INSERTS_PAY`]); into an [`MlabFramebuffer`](crate::MlabFramebuffer)
-//! it is 1.6x faster on x86-64-v3, 1.2-1.4x on SSE2.
+//! What it gains is measured in `docs/performance.md` (`benches/batch.rs`): most for MLAB
+//! into a [`SpanFramebuffer`](crate::SpanFramebuffer), whose merge the lanes share; little for
+//! HT, whose per-pixel insert has no merge and is cheap already. Into the pixel-major
+//! [`HybridFramebuffer`](crate::HybridFramebuffer) span inserts are slower than per-pixel
+//! inserts (a gather and a scatter around an insert with nothing to share), so there the
+//! batcher passes each fragment straight through ([`Framebuffer::SPAN_INSERTS_PAY`]).
+//! [`span_inserts`](SpanBatcher::span_inserts) counts what it sent, to see how full the spans
+//! of your stream are.
 //!
-//! The window: 64 x 32 pixels (256 spans, about 43 KiB). On the mesh of `benches/batch.rs`
-//! (the tori of `examples/rasterizer.rs` at 320 x 240, 10 pixels per triangle) it gives
-//! 5.8 fragments per span insert; 64 x 8 pixels gave 4.0, 128 x 16 gave 4.5, 64 x 64 gave
-//! 6.4 for twice the memory. On the coherent stream (rectangles) every window gives 6.1-6.2.
+//! The window: 64 x 32 pixels (256 spans, a fixed-size value: build it once per frame and
+//! band). Why this size, against the others tried: `docs/performance.md`.
 //!
 //! ```
 //! use mlab::glam::Vec3;
@@ -97,6 +94,8 @@ pub struct SpanBatcher<'f, F: Framebuffer> {
     height: u32,
     /// `y << 32 | x / 8` of the span pending in each slot (meaningful when its mask is not 0).
     keys: [u64; BATCH_SLOTS],
+    /// Span inserts sent to the framebuffer so far.
+    span_inserts: u64,
     slots: [Slot; BATCH_SLOTS],
 }
 
@@ -108,6 +107,7 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
             height: fb.height(),
             fb,
             keys: [0; BATCH_SLOTS],
+            span_inserts: 0,
             slots: [Slot {
                 fragments: FragmentLanes::TRANSPARENT,
                 mask: 0,
@@ -161,6 +161,7 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         if mask != 0 && (self.keys[s] != key || mask & bit != 0) {
             let k = self.keys[s];
             Self::flush_slot(self.fb, k, &mut self.slots[s])?;
+            self.span_inserts += 1;
         }
         self.keys[s] = key;
         let slot = &mut self.slots[s];
@@ -204,9 +205,26 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         for (slot, key) in self.slots.iter_mut().zip(&self.keys) {
             if slot.mask != 0 {
                 Self::flush_slot(self.fb, *key, slot)?;
+                self.span_inserts += 1;
             }
         }
         Ok(())
+    }
+
+    /// Width of the framebuffer, in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// Height of the framebuffer, in lines.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// Span inserts sent to the framebuffer so far (fragments pushed divided by this is how
+    /// full the spans of the stream are; 0 where fragments pass straight through).
+    pub fn span_inserts(&self) -> u64 {
+        self.span_inserts
     }
 
     /// Fragments pushed but not yet in the framebuffer.

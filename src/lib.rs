@@ -11,10 +11,11 @@
 //! |---|---|---|
 //! | one pixel, or your own storage per pixel (a shader port, a ray tracer) | [`BlendingArray`], [`Hybrid`] | [pixel](#a-pixel) |
 //! | fragments arrive one pixel at a time, in any order, read back per pixel | [`MlabFramebuffer`], [`HybridFramebuffer`] ([`Framebuffer`]) | [framebuffer](#a-framebuffer) |
-//! | a rasterizer that emits one pixel at a time (scanline, tile, `euc`-like) | [`SpanBatcher`] over a [`SpanFramebuffer`] (MLAB: 2.1-2.6x faster than per-pixel inserts on x86-64-v3; HT: 1.0-1.3x) | [batcher](#a-rasterizer-one-pixel-at-a-time) |
+//! | a rasterizer that emits one pixel at a time (scanline, tile, `euc`-like) | [`SpanBatcher`] over a [`SpanFramebuffer`] (faster than per-pixel inserts for MLAB; `docs/performance.md`) | [batcher](#a-rasterizer-one-pixel-at-a-time) |
 //! | a rasterizer that shades 8 pixels of a line at once | [`SpanFramebuffer`], [`HybridSpanFramebuffer`] span inserts | [spans](#a-rasterizer-8-pixels-at-a-time) |
 //! | quality chosen at run time (a settings menu) | [`DynFramebuffer`] with [`Layers`] | [run time](#quality-at-run-time) |
-//! | your own span storage, your own loops | [`lanes`]: `mlab_insert_with`, `hybrid_insert_parts`, resolves | [`lanes`] |
+//! | code generic over the method and the arrangement | [`Grid`]`<P: Pixel, L: Arrangement>`, of which the four framebuffers are aliases | [`framebuffer`] |
+//! | your own span storage, your own loops | [`lanes`]: `mlab_insert_with`, `hybrid_insert`, resolves | [`lanes`] |
 //!
 //! All framebuffers implement the [`Framebuffer`] trait (bring it into scope: `use
 //! mlab::Framebuffer;`): pixel and span inserts, resolves to f32, premultiplied RGBA,
@@ -26,6 +27,11 @@
 //! says straight) and every output. [`to_rgba8`] and [`Framebuffer::resolve_rgba8`] write
 //! linear unorm8 (`floor(v * 255 + 0.5)`), **not** sRGB-encoded bytes: upload them to a
 //! linear `Rgba8Unorm` target, or resolve to f32 or RGBA16F and encode for display.
+//!
+//! **Equal depths**: a fragment goes in front of the rows at its depth (Listing 1's `<=`), so
+//! coplanar fragments blend like OVER in submission order, the **later one in front**. A
+//! reference that sorts by depth with a stable sort puts the earlier one in front and differs
+//! wherever depths tie (`examples/rasterizer.rs` writes the exact answer with this rule).
 //!
 //! **"Row"** means the paper's 8-byte layer of one pixel ([`Row`]: premultiplied RGB8,
 //! transmittance, depth), never a line of the image; lines are `y`.
@@ -117,8 +123,9 @@
 //! ```
 //! use mlab::{DynFramebuffer, Fragment, Framebuffer, Layers, Row};
 //!
-//! let quality = Layers::Hybrid(3); // or Layers::Mlab(1, 2, 3, 4, 6 or 8)
+//! let quality = Layers::Hybrid(3); // or Layers::Mlab(1 to 8)
 //! let mut storage = vec![Row::EMPTY; quality.rows_needed(64, 64)?];
+//! // `: DynFramebuffer` names the default arithmetic (a default does not drive inference).
 //! let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(quality, &mut storage, 64, 64)?;
 //! fb.insert(1, 2, &Fragment::premultiplied_rgba([0.1, 0.1, 0.1, 0.2], 1.0)?)?;
 //! # Ok::<(), mlab::Error>(())
@@ -133,7 +140,7 @@
 //! | [`hybrid::PaperTail`] | the paper's HT tail: 3 x 10, 16, 16 bit | 8 bytes, align 8 |
 //! | [`BlendingArray<M>`] | MLAB blending array, `M >= 1` rows | `8 * M` bytes |
 //! | [`Hybrid<K>`] | HT: `K` head rows + tail | `8 * (K + 1)` bytes |
-//! | framebuffers, [`SpanBatcher`] | views over caller-owned `&mut [Row]`; a fixed-size batcher | none; about 43 KiB |
+//! | framebuffers ([`Grid`]), [`SpanBatcher`] | views over caller-owned `&mut [Row]`; a fixed-size batcher | none; about 43 KiB |
 //!
 //! - [`mlab::insert_with`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
 //!   [`resolve_rows`] is Eq. 5 and [`Resolved::over`] Eq. 6. The module `mlab::mlab` is

@@ -264,6 +264,28 @@ fn batched_span_storage_equals_pixel_major_bytes() {
     assert_eq!(back, a);
 }
 
+/// Its size and the span inserts it sent: 8 fragments of one span are one insert, a second
+/// fragment for a pending pixel flushes the span first, a fragment of another span in the
+/// same slot too.
+#[test]
+fn batcher_counts_its_span_inserts() {
+    let mut storage = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(200, 40).expect("size")];
+    let mut fb = SpanFramebuffer::<2>::new_cleared(&mut storage, 200, 40).expect("size");
+    let mut batch = SpanBatcher::new(&mut fb);
+    assert_eq!((batch.width(), batch.height()), (200, 40));
+    let row = Row::new([1, 2, 3], 100, 1.0);
+    for x in 0..8 {
+        batch.insert_row(x, 0, row).expect("inside");
+    }
+    assert_eq!((batch.span_inserts(), batch.pending()), (0, 8));
+    batch.insert_row(3, 0, row).expect("inside"); // pixel 3 is pending: its span goes first
+    assert_eq!((batch.span_inserts(), batch.pending()), (1, 1));
+    batch.insert_row(64, 0, row).expect("inside"); // another span, the same slot
+    assert_eq!((batch.span_inserts(), batch.pending()), (2, 1));
+    batch.flush().expect("flush");
+    assert_eq!((batch.span_inserts(), batch.pending()), (3, 0));
+}
+
 #[test]
 fn batcher_refuses_pixels_outside_and_keeps_nothing() {
     let mut storage = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(10, 3).expect("size")];
@@ -304,6 +326,7 @@ fn batcher_passes_fragments_through_where_span_inserts_do_not_pay() {
         push_batch(&mut batch, x, y, item);
         assert_eq!(batch.pending(), 0);
     }
+    assert_eq!(batch.span_inserts(), 0, "passed through: no span insert");
     assert!(matches!(
         batch.insert_row(w, 0, Row::new([1, 2, 3], 100, 1.0)),
         Err(FramebufferError::OutOfBounds { .. })
