@@ -155,16 +155,16 @@ pub fn check_row(f: &Fragment, row: Row, expected: Row, max_error: f64, name: &s
 
 /// True if the rows satisfy the blending-array invariants (see [`check_invariants`]).
 pub fn invariants_hold(rows: &[Row]) -> bool {
-    let sorted = rows.windows(2).all(|w| w[0].depth() <= w[1].depth());
-    let no_nan = rows.iter().all(|r| !r.depth().is_nan());
-    let inf_are_empty = rows.iter().all(|r| r.depth() != f32::INFINITY || r.is_empty());
-    sorted && no_nan && inf_are_empty
+    mlab_reference::check_invariants(rows, false).is_ok()
 }
 
-/// Blending-array (and HT head) invariants: no NaN depth, depths non-decreasing front to
-/// back, rows at `z = +infinity` are exactly [`Row::EMPTY`] (hence only at the back).
+/// Blending-array (and HT head) invariants ([`mlab_reference::check_invariants`]): no NaN
+/// depth, depths non-decreasing front to back, rows at `z = +infinity` are exactly
+/// [`Row::EMPTY`] (hence only at the back).
 pub fn check_invariants(rows: &[Row], context: &dyn core::fmt::Debug) {
-    assert!(invariants_hold(rows), "invariants broken: {rows:?} after {context:?}");
+    if let Err(e) = mlab_reference::check_invariants(rows, false) {
+        panic!("invariants broken: {e} after {context:?}");
+    }
 }
 
 /// A resolved pixel: finite, transmittance in `[0, 1]`, color channels in `[0, max_color]`

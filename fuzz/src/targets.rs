@@ -4,12 +4,13 @@
 //! rounding and tail, and [`Unbiased`], the default: dithered rounding and the wide
 //! tail), against the reference model of that arithmetic ([`Model`]).
 
+use mlab::framebuffer::Pixel;
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::{
-    Arithmetic, Background, BlendingArray, Fragment, Framebuffer, FramebufferError, Hybrid, HybridFramebuffer,
-    HybridSpanFramebuffer, MlabFramebuffer, Paper, Resolved, Row, SpanFramebuffer, TailFormat, Unbiased, hybrid,
-    hybrid::PaperTail, mlab as mlab_mod, resolve_rows, to_rgba8, to_rgba16f,
+    Arithmetic, Background, BlendingArray, Fragment, Framebuffer, FramebufferError, Grid, Ht, Hybrid, Mlab, Paper,
+    PixelMajor, Resolved, Row, Spans, TailFormat, Unbiased, hybrid, hybrid::PaperTail, mlab as mlab_mod, resolve_rows,
+    to_rgba8, to_rgba16f,
 };
 
 use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
@@ -38,9 +39,11 @@ pub const MAX_FRAGMENTS: usize = 64;
 /// The limit the targets check for a resolved tail's color: the documented
 /// `COLOR_MAX * (1/255)` in f32 of the arithmetic's tail (`1023` for the paper's, `8191`
 /// for the wide one), with the color maximum taken from the reference layout (equal to the
-/// kernel's `TailFormat::COLOR_MAX`, checked by `rows_from_bytes`). Finding F1,
-/// the tail amplifying its light above it, was fixed in d37150f by clamping the factor
-/// `(1 - T_tail) / S_a` to 1.
+/// kernel's `TailFormat::COLOR_MAX`, checked by `rows_from_bytes`). Finding F1, the tail
+/// amplifying its light above it, was fixed in d37150f: the color factor
+/// `g = (1 - T_tail) / S_a` is evaluated as `S_n / n` and clamped to at most 1 (`S_n <= n`
+/// but for rounding), and where the mean alpha exceeds 1 (arbitrary bytes) the mean is
+/// clamped to 1 and `g = 1 / S_a < 1` (`resolve::tail_lanes`).
 pub fn tail_color_limit<A: Model>() -> f32 {
     A::TAIL.max(0) as f32 * (1.0 / 255.0)
 }
@@ -117,11 +120,7 @@ fn mlab_stream_m<const M: usize, A: Model>(input: &mut Input) {
         array.insert(&f);
         let mask = lane_mask(accepted.len());
         let rows8 = lane_rows(row, mask);
-        if is_default::<A>() && accepted.len() % 2 == 1 {
-            lanes::mlab_insert_with::<mlab::Unbiased, _>(&mut span, &rows8, mask);
-        } else {
-            lanes::mlab_insert_with::<A, _>(&mut span, &rows8, mask);
-        }
+        lanes::mlab_insert_with::<A, _>(&mut span, &rows8, mask);
         for (lane, a) in lane_arrays.iter_mut().enumerate() {
             if mask >> lane & 1 == 1 {
                 mlab_mod::insert_with::<A, _>(a, rows8[lane]);
@@ -327,7 +326,10 @@ pub fn check_layout(b: [u8; 8]) {
     let tail = PaperTail::from_bytes(b);
     assert_eq!(tail.to_bytes(), b);
     assert_eq!(mlab::Row::from_bytes(tail.to_bytes()).words(), w);
-    assert_eq!(<PaperTail as mlab::TailFormat>::from_bytes(mlab::Row::from_words(w).to_bytes()), tail);
+    assert_eq!(
+        <PaperTail as mlab::TailFormat>::from_bytes(mlab::Row::from_words(w).to_bytes()),
+        tail
+    );
     assert_eq!(
         tail.color_sum(),
         [w[0] & 1023, (w[0] >> 10) & 1023, (w[0] >> 20) & 1023]
@@ -341,7 +343,10 @@ pub fn check_layout(b: [u8; 8]) {
     assert_eq!(wide.to_bytes(), b);
     assert_eq!(u64::from_le_bytes(wide.to_bytes()), v);
     assert_eq!(mlab::Row::from_bytes(wide.to_bytes()).words(), w);
-    assert_eq!(<mlab::Tail as mlab::TailFormat>::from_bytes(mlab::Row::from_words(w).to_bytes()), wide);
+    assert_eq!(
+        <mlab::Tail as mlab::TailFormat>::from_bytes(mlab::Row::from_words(w).to_bytes()),
+        wide
+    );
     check_tail_fields::<Unbiased>(b);
 }
 
@@ -675,65 +680,64 @@ fn check_pixels(r: Resolved, input: &mut Input, context: &dyn core::fmt::Debug) 
 // ---------------------------------------------------------------------------------------
 // lanes_masks
 
-/// A framebuffer kind, so one span checker serves MLAB and HT.
+/// What differs between the kinds of pixel the `spans` target drives: the kernel's kind
+/// ([`Layout::P`], a pixel of both arrangements, `Grid<P, PixelMajor>` and `Grid<P, Spans>`,
+/// driven by the generic code below) and the reference's model of one pixel's slots.
 pub trait Layout {
+    /// The kernel's pixel kind.
+    type P: Pixel;
     /// Row-sized slots per pixel.
-    const SLOTS: usize;
+    const SLOTS: usize = <Self::P as Pixel>::ROWS;
     /// The arithmetic's name, for messages.
     const NAME: &'static str;
     /// The reference row of a valid fragment in the layout's arithmetic.
     fn ref_row(f: &Fragment) -> Row;
     /// Largest resolved color.
     fn max_color() -> f32;
-    /// The view type.
-    type View<'a>;
-    /// `new` of the view.
-    fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError>;
-    /// `insert` of the view.
-    fn insert(v: &mut Self::View<'_>, x: u32, y: u32, f: &Fragment) -> Result<(), FramebufferError>;
-    /// `clear` of the view.
-    fn clear(v: &mut Self::View<'_>);
-    /// `resolve` of one pixel.
-    fn resolve(v: &Self::View<'_>, x: u32, y: u32) -> Result<Resolved, FramebufferError>;
-    /// `resolve_into`, `resolve_rgba8` or `resolve_rgba16f`, by `which`, into f32 pixels.
-    fn resolve_all(v: &Self::View<'_>, which: u8, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError>;
-    /// `as_bytes` of the view.
-    fn bytes<'b>(v: &'b Self::View<'_>) -> &'b [u8];
     /// The reference insert on one pixel's slots (any contents).
     fn ref_insert(slots: &mut [Row], row: Row);
     /// The resolve of one pixel's slots, split here.
     fn ref_resolve(slots: &[Row]) -> Resolved;
     /// A cleared pixel.
     fn cleared(slots: &mut [Row]);
+    /// One pixel's contents ([`Grid::pixel`]) as its `SLOTS` rows (HT: head rows, then the tail).
+    fn slots(value: <Self::P as Pixel>::Value) -> Vec<Row>;
     /// The span `x0 .. x0 + 8` of line `y` through the lanes kernel: gather the pixels into
     /// a lanes span (lanes outside the buffer hold a sentinel), insert `row` in the lanes of
     /// `mask` that are inside, check that every other lane is unchanged, scatter back.
     fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8);
-    /// `rows_needed` of the span framebuffer.
-    fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError>;
-    /// `insert_span` of the span framebuffer over `s`.
-    fn span_insert(
-        s: &mut [Row],
-        w: u32,
-        h: u32,
-        x: u32,
-        y: u32,
-        rows: &[Row; LANES],
-        mask: u8,
-    ) -> Result<(), FramebufferError>;
-    /// The resolve writers of the span framebuffer (as [`Layout::resolve_all`]).
-    fn span_resolve_all(
-        s: &mut [Row],
-        w: u32,
-        h: u32,
-        which: u8,
-        out: &mut [Vec4],
-        bg: Background,
-    ) -> Result<(), FramebufferError>;
-    /// `clear` of the span framebuffer.
-    fn span_clear(s: &mut [Row], w: u32, h: u32);
-    /// `pixel(x, y)` of the span framebuffer as `SLOTS` rows (HT: head rows, then the tail).
-    fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError>;
+}
+
+/// The pixel-major framebuffer of a layout.
+type View<'a, L> = Grid<'a, <L as Layout>::P, PixelMajor>;
+
+/// The span framebuffer of a layout over `s` (its storage is always of the right length).
+fn span_view<L: Layout>(s: &mut [Row], w: u32, h: u32) -> Grid<'_, L::P, Spans> {
+    Grid::new(s, w, h).expect("span storage")
+}
+
+/// Run one of the three resolve writers of `v`; bytes and halves are widened to f32 so that
+/// errors and untouched outputs compare the same way.
+fn resolve_all<F: Framebuffer>(v: &F, which: u8, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
+    match which % 3 {
+        0 => v.resolve_into(out, bg),
+        1 => {
+            let mut px: Vec<[u8; 4]> = out.iter().map(|p| p.to_array().map(|x| x as u8)).collect();
+            let r = v.resolve_rgba8(&mut px, bg);
+            for (o, p) in out.iter_mut().zip(px) {
+                *o = Vec4::from_array(p.map(f32::from));
+            }
+            r
+        }
+        _ => {
+            let mut px: Vec<[f16; 4]> = out.iter().map(|p| p.to_array().map(f16::from_f32)).collect();
+            let r = v.resolve_rgba16f(&mut px, bg);
+            for (o, p) in out.iter_mut().zip(px) {
+                *o = Vec4::from_array(p.map(f16::to_f32));
+            }
+            r
+        }
+    }
 }
 
 /// Lanes of the span `x0 .. x0 + 8` that lie inside a `w x h` buffer on line `y`.
@@ -753,36 +757,8 @@ pub struct MlabLayout<const M: usize, A>(core::marker::PhantomData<A>);
 /// HT with `K` head rows and a tail per pixel in the arithmetic `A`.
 pub struct HybridLayout<const K: usize, A>(core::marker::PhantomData<A>);
 
-/// Run one of the three resolve writers; bytes and halves are widened to f32 so that
-/// errors and untouched outputs compare the same way.
-macro_rules! resolve_all_impl {
-    ($v:expr, $which:expr, $out:expr, $bg:expr) => {{
-        let n = $out.len();
-        match $which % 3 {
-            0 => $v.resolve_into($out, $bg),
-            1 => {
-                let mut px: Vec<[u8; 4]> = $out.iter().map(|p| p.to_array().map(|x| x as u8)).collect();
-                let r = $v.resolve_rgba8(&mut px, $bg);
-                debug_assert_eq!(px.len(), n);
-                for (o, p) in $out.iter_mut().zip(px) {
-                    *o = Vec4::from_array(p.map(f32::from));
-                }
-                r
-            }
-            _ => {
-                let mut px: Vec<[f16; 4]> = $out.iter().map(|p| p.to_array().map(f16::from_f32)).collect();
-                let r = $v.resolve_rgba16f(&mut px, $bg);
-                for (o, p) in $out.iter_mut().zip(px) {
-                    *o = Vec4::from_array(p.map(f16::to_f32));
-                }
-                r
-            }
-        }
-    }};
-}
-
 impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
-    const SLOTS: usize = M;
+    type P = Mlab<M, A>;
     const NAME: &'static str = A::NAME;
     fn ref_row(f: &Fragment) -> Row {
         A::ref_row(f)
@@ -790,60 +766,8 @@ impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
     fn max_color() -> f32 {
         M as f32
     }
-    type View<'a> = MlabFramebuffer<'a, M, A>;
-    fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
-        SpanFramebuffer::<M, A>::rows_needed(w, h)
-    }
-    fn span_insert(
-        s: &mut [Row],
-        w: u32,
-        h: u32,
-        x: u32,
-        y: u32,
-        rows: &[Row; LANES],
-        mask: u8,
-    ) -> Result<(), FramebufferError> {
-        SpanFramebuffer::<M, A>::new(s, w, h)
-            .expect("span storage")
-            .insert_span(x, y, rows, mask)
-    }
-    fn span_resolve_all(
-        s: &mut [Row],
-        w: u32,
-        h: u32,
-        which: u8,
-        out: &mut [Vec4],
-        bg: Background,
-    ) -> Result<(), FramebufferError> {
-        let v = SpanFramebuffer::<M, A>::new(s, w, h).expect("span storage");
-        resolve_all_impl!(v, which, out, bg)
-    }
-    fn span_clear(s: &mut [Row], w: u32, h: u32) {
-        SpanFramebuffer::<M, A>::new(s, w, h).expect("span storage").clear()
-    }
-    fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
-        SpanFramebuffer::<M, A>::new(s, w, h)
-            .expect("span storage")
-            .pixel(x, y)
-            .map(|p| p.to_vec())
-    }
-    fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError> {
-        MlabFramebuffer::new(s, w, h)
-    }
-    fn insert(v: &mut Self::View<'_>, x: u32, y: u32, f: &Fragment) -> Result<(), FramebufferError> {
-        v.insert(x, y, f)
-    }
-    fn clear(v: &mut Self::View<'_>) {
-        v.clear()
-    }
-    fn resolve(v: &Self::View<'_>, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
-        v.resolve(x, y)
-    }
-    fn resolve_all(v: &Self::View<'_>, which: u8, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
-        resolve_all_impl!(v, which, out, bg)
-    }
-    fn bytes<'b>(v: &'b Self::View<'_>) -> &'b [u8] {
-        v.as_bytes()
+    fn slots(value: [Row; M]) -> Vec<Row> {
+        value.to_vec()
     }
     fn ref_insert(slots: &mut [Row], row: Row) {
         let (mut rows, pushed) = ref_bubble(slots, row);
@@ -885,7 +809,7 @@ impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
 }
 
 impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
-    const SLOTS: usize = K + 1;
+    type P = Ht<K, A>;
     const NAME: &'static str = A::NAME;
     fn ref_row(f: &Fragment) -> Row {
         A::ref_row(f)
@@ -893,64 +817,10 @@ impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
     fn max_color() -> f32 {
         K as f32 + tail_color_limit::<A>()
     }
-    type View<'a> = HybridFramebuffer<'a, K, A>;
-    fn span_rows_needed(w: u32, h: u32) -> Result<usize, FramebufferError> {
-        HybridSpanFramebuffer::<K, A>::rows_needed(w, h)
-    }
-    fn span_insert(
-        s: &mut [Row],
-        w: u32,
-        h: u32,
-        x: u32,
-        y: u32,
-        rows: &[Row; LANES],
-        mask: u8,
-    ) -> Result<(), FramebufferError> {
-        HybridSpanFramebuffer::<K, A>::new(s, w, h)
-            .expect("span storage")
-            .insert_span(x, y, rows, mask)
-    }
-    fn span_resolve_all(
-        s: &mut [Row],
-        w: u32,
-        h: u32,
-        which: u8,
-        out: &mut [Vec4],
-        bg: Background,
-    ) -> Result<(), FramebufferError> {
-        let v = HybridSpanFramebuffer::<K, A>::new(s, w, h).expect("span storage");
-        resolve_all_impl!(v, which, out, bg)
-    }
-    fn span_clear(s: &mut [Row], w: u32, h: u32) {
-        HybridSpanFramebuffer::<K, A>::new(s, w, h)
-            .expect("span storage")
-            .clear()
-    }
-    fn span_pixel(s: &mut [Row], w: u32, h: u32, x: u32, y: u32) -> Result<Vec<Row>, FramebufferError> {
-        let (head, tail) = HybridSpanFramebuffer::<K, A>::new(s, w, h)
-            .expect("span storage")
-            .pixel(x, y)?;
+    fn slots((head, tail): ([Row; K], A::Tail)) -> Vec<Row> {
         let mut v = head.to_vec();
         v.push(Row::from_bytes(tail.to_bytes()));
-        Ok(v)
-    }
-    fn view(s: &mut [Row], w: u32, h: u32) -> Result<Self::View<'_>, FramebufferError> {
-        HybridFramebuffer::new(s, w, h)
-    }
-    fn insert(v: &mut Self::View<'_>, x: u32, y: u32, f: &Fragment) -> Result<(), FramebufferError> {
-        v.insert(x, y, f)
-    }
-    fn clear(v: &mut Self::View<'_>) {
-        v.clear()
-    }
-    fn resolve(v: &Self::View<'_>, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
-        v.resolve(x, y)
-    }
-    fn resolve_all(v: &Self::View<'_>, which: u8, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
-        resolve_all_impl!(v, which, out, bg)
-    }
-    fn bytes<'b>(v: &'b Self::View<'_>) -> &'b [u8] {
-        v.as_bytes()
+        v
     }
     fn ref_insert(slots: &mut [Row], row: Row) {
         let tail = slots[K].to_bytes();
@@ -1063,7 +933,7 @@ fn spans<L: Layout>(input: &mut Input) {
         };
     }
     let snapshot = buf.clone();
-    match L::view(&mut buf[GUARD..GUARD + len], w, h).map(|v| L::bytes(&v).to_vec()) {
+    match View::<L>::new(&mut buf[GUARD..GUARD + len], w, h).map(|v| v.as_bytes().to_vec()) {
         Err(e) => {
             assert_ne!(len, needed, "{w}x{h}: storage of the right length refused: {e:?}");
             assert_eq!(
@@ -1088,7 +958,7 @@ fn spans<L: Layout>(input: &mut Input) {
     // that no insert may touch.
     let spans_per_line = (w as usize).div_ceil(LANES);
     let slen = spans_per_line * LANES * h as usize * L::SLOTS;
-    assert_eq!(L::span_rows_needed(w, h), Ok(slen));
+    assert_eq!(Grid::<L::P, Spans>::rows_needed(w, h), Ok(slen));
     let sidx = |x: usize, y: usize, j: usize| ((y * spans_per_line + x / LANES) * L::SLOTS + j) * LANES + x % LANES;
     let mut sbuf = vec![sentinel(7, 7); slen];
     for y in 0..h as usize {
@@ -1125,7 +995,7 @@ fn spans<L: Layout>(input: &mut Input) {
         let before = buf.clone();
         let mut expected = buf.clone();
         let mut lanes_result: Option<Vec<Row>> = None;
-        let mut v = L::view(&mut buf[GUARD..GUARD + len], w, h).expect("accepted above");
+        let mut v = View::<L>::new(&mut buf[GUARD..GUARD + len], w, h).expect("accepted above");
         match op % 4 {
             // A span: pixels x0 .. x0 + n on line y, lane i on if bit i of the mask.
             0 | 1 => {
@@ -1168,14 +1038,14 @@ fn spans<L: Layout>(input: &mut Input) {
                     })
                 };
                 let sbefore = sbuf.clone();
-                let got = L::span_insert(&mut sbuf, w, h, x0, y, &rows8, span_mask);
+                let got = span_view::<L>(&mut sbuf, w, h).insert_span(x0, y, &rows8, span_mask);
                 match expected_err {
                     Some(e) => {
                         assert_eq!(got, Err(e), "span ({x0}, {y}) mask {span_mask:#010b} in {w}x{h}");
                         assert_eq!(sbuf, sbefore, "a refused span changed the span framebuffer");
                         let on = span_mask & inside(w, h, x0, y);
                         if on != 0 {
-                            assert_eq!(L::span_insert(&mut sbuf, w, h, x0, y, &rows8, on), Ok(()));
+                            assert_eq!(span_view::<L>(&mut sbuf, w, h).insert_span(x0, y, &rows8, on), Ok(()));
                         }
                     }
                     None => assert_eq!(got, Ok(())),
@@ -1185,7 +1055,7 @@ fn spans<L: Layout>(input: &mut Input) {
                     if mask >> lane & 1 == 0 {
                         continue;
                     }
-                    let got = L::insert(&mut v, x, y, &f);
+                    let got = v.insert(x, y, &f);
                     if x < w && y < h {
                         assert_eq!(got, Ok(()));
                         let p = pixel(x, y);
@@ -1221,10 +1091,10 @@ fn spans<L: Layout>(input: &mut Input) {
                 };
                 let sentinel_px = Vec4::new(7.0, 7.0, 7.0, 7.0);
                 let mut out = vec![sentinel_px; n];
-                let got = L::resolve_all(&v, which, &mut out, bg);
+                let got = resolve_all(&v, which, &mut out, bg);
                 let mut sout = vec![sentinel_px; n];
                 assert_eq!(
-                    L::span_resolve_all(&mut sbuf, w, h, which, &mut sout, bg),
+                    resolve_all(&span_view::<L>(&mut sbuf, w, h), which, &mut sout, bg),
                     got,
                     "span fb resolve result"
                 );
@@ -1247,7 +1117,7 @@ fn spans<L: Layout>(input: &mut Input) {
                         for x in 0..w {
                             let p = pixel(x, y);
                             let r = L::ref_resolve(&before[p..p + L::SLOTS]);
-                            assert_eq!(L::resolve(&v, x, y), Ok(r));
+                            assert_eq!(v.resolve(x, y), Ok(r));
                             check_resolved(r, L::max_color(), &(x, y));
                             let want = r.pixel(bg);
                             let got = out[(y * w + x) as usize];
@@ -1264,7 +1134,7 @@ fn spans<L: Layout>(input: &mut Input) {
                     break;
                 };
                 let (x, y) = (u32::from(x), u32::from(y) % (h + 2));
-                let sp = L::span_pixel(&mut sbuf, w, h, x, y);
+                let sp = span_view::<L>(&mut sbuf, w, h).pixel(x, y).map(L::slots);
                 if x < w && y < h {
                     let p = pixel(x, y);
                     assert_eq!(sp, Ok(before[p..p + L::SLOTS].to_vec()), "span fb pixel ({x}, {y})");
@@ -1281,7 +1151,7 @@ fn spans<L: Layout>(input: &mut Input) {
                 }
                 if x >= w || y >= h {
                     assert_eq!(
-                        L::resolve(&v, x, y),
+                        v.resolve(x, y),
                         Err(FramebufferError::OutOfBounds {
                             x,
                             y,
@@ -1292,7 +1162,7 @@ fn spans<L: Layout>(input: &mut Input) {
                 }
             }
             _ => {
-                L::span_clear(&mut sbuf, w, h);
+                span_view::<L>(&mut sbuf, w, h).clear();
                 for y in 0..h as usize {
                     for x in w as usize..spans_per_line * LANES {
                         for j in 0..L::SLOTS {
@@ -1301,14 +1171,14 @@ fn spans<L: Layout>(input: &mut Input) {
                         }
                     }
                 }
-                L::clear(&mut v);
+                v.clear();
                 for p in 0..(w * h) as usize {
                     let p = GUARD + p * L::SLOTS;
                     L::cleared(&mut expected[p..p + L::SLOTS]);
                 }
             }
         }
-        drop(v);
+        let _ = v; // the view ends here: `buf` is read below
         assert_eq!(buf[..GUARD], before[..GUARD], "guard rows before the storage changed");
         assert_eq!(
             buf[GUARD + len..],

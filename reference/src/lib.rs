@@ -9,6 +9,7 @@
 //! - [`model`]: reference models of the kernel's two arithmetics ([`Model`], implemented for
 //!   [`mlab::Paper`] and [`mlab::Unbiased`]): quantization, dithers, merge products, a
 //!   `Vec`-based Listing 1, the HT tail layouts and a sort-and-sum Hybrid Transparency.
+//! - [`check_invariants`]: the blending-array invariants, for the tests and the fuzz targets.
 //! - [`lanes`]: the lanes-vs-scalar checks (the only part that calls the kernel's code, on
 //!   both sides of each comparison).
 //!
@@ -33,3 +34,36 @@ pub mod rng;
 pub use model::Model;
 pub use oracle::{DELTA, DELTA_UNBIASED, Layer, oracle, oracle_with_bound};
 pub use rng::Rng;
+
+use mlab::Row;
+
+/// Invariants of a blending array or HT head after a stream of valid fragments: rows
+/// sorted by non-decreasing depth; rows at +infinity are exactly empty and only at the
+/// back; with `normal` (no additive light), color bytes never exceed `255 - T`.
+pub fn check_invariants(rows: &[Row], normal: bool) -> Result<(), String> {
+    let mut seen_empty = false;
+    for (i, r) in rows.iter().enumerate() {
+        let z = r.depth();
+        if z.is_nan() {
+            return Err(format!("row {i} has NaN depth: {r:?}"));
+        }
+        if z == f32::INFINITY {
+            if !r.is_empty() {
+                return Err(format!("row {i} at +inf is not empty: {r:?}"));
+            }
+            seen_empty = true;
+        } else if seen_empty {
+            return Err(format!("row {i} is not empty but follows an empty row: {rows:?}"));
+        }
+        if i > 0 && rows[i - 1].depth() > z {
+            return Err(format!("rows {} and {i} are out of order: {rows:?}", i - 1));
+        }
+        if normal {
+            let coverage = 255 - r.transmittance();
+            if r.color().iter().any(|&c| c > coverage) {
+                return Err(format!("row {i} has color above its coverage: {r:?}"));
+            }
+        }
+    }
+    Ok(())
+}

@@ -3,8 +3,8 @@
 //! (`reference/`), shared with the fuzz targets and the lab.
 #![allow(dead_code)]
 
+use mlab::Fragment;
 use mlab::glam::Vec3;
-use mlab::{Fragment, Row};
 use proptest::prelude::*;
 
 /// A fragment from straight color (premultiplied color never exceeds alpha).
@@ -36,36 +36,8 @@ pub fn additive_fragment() -> impl Strategy<Value = Fragment> {
         .prop_map(|(c, z)| Fragment::additive(Vec3::from_array(c), z).expect("valid additive fragment"))
 }
 
-/// Invariants of a blending array or HT head after a stream of valid fragments: rows
-/// sorted by non-decreasing depth; rows at +infinity are exactly empty and only at the
-/// back; with `normal` (no additive light), color bytes never exceed `255 - T`.
-pub fn check_invariants(rows: &[Row], normal: bool) -> Result<(), String> {
-    let mut seen_empty = false;
-    for (i, r) in rows.iter().enumerate() {
-        let z = r.depth();
-        if z.is_nan() {
-            return Err(format!("row {i} has NaN depth: {r:?}"));
-        }
-        if z == f32::INFINITY {
-            if !r.is_empty() {
-                return Err(format!("row {i} at +inf is not empty: {r:?}"));
-            }
-            seen_empty = true;
-        } else if seen_empty {
-            return Err(format!("row {i} is not empty but follows an empty row: {rows:?}"));
-        }
-        if i > 0 && rows[i - 1].depth() > z {
-            return Err(format!("rows {} and {i} are out of order: {rows:?}", i - 1));
-        }
-        if normal {
-            let coverage = 255 - r.transmittance();
-            if r.color().iter().any(|&c| c > coverage) {
-                return Err(format!("row {i} has color above its coverage: {r:?}"));
-            }
-        }
-    }
-    Ok(())
-}
+#[allow(unused_imports)] // not every test file checks invariants
+pub use mlab_reference::check_invariants;
 
 /// Max absolute channel difference.
 pub fn max_diff(a: [f64; 3], b: [f64; 3]) -> f64 {
