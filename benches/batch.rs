@@ -18,8 +18,8 @@ use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_m
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::{
-    Background, Fragment, Framebuffer, HybridFramebuffer, HybridSpanFramebuffer, MlabFramebuffer, Row, SpanBatcher,
-    SpanFramebuffer,
+    Background, DynFramebuffer, Fragment, Framebuffer, HybridFramebuffer, HybridSpanFramebuffer, Layers,
+    MlabFramebuffer, Row, SpanBatcher, SpanFramebuffer,
 };
 use mlab_reference::Rng;
 use std::hint::black_box;
@@ -102,6 +102,11 @@ drivers! {
     ht_per_pixel_spans: HybridSpanFramebuffer<'_, 3> => per_pixel;
     ht_batcher_spans: HybridSpanFramebuffer<'_, 3> => batched;
     batcher_alone: Probe<'_> => batched;
+    // The run-time sizes (`DynFramebuffer`, the same span grids behind one match per call).
+    mlab_per_pixel_dyn: DynFramebuffer<'_> => per_pixel;
+    mlab_batcher_dyn: DynFramebuffer<'_> => batched;
+    ht_per_pixel_dyn: DynFramebuffer<'_> => per_pixel;
+    ht_batcher_dyn: DynFramebuffer<'_> => batched;
 }
 
 /// A framebuffer that drops the span inserts it gets (after `black_box`, so the batcher's
@@ -198,6 +203,27 @@ macro_rules! insert_benches {
         $g.bench_function(BenchmarkId::new("ht_batcher_spans", $k), |b| {
             b.iter(|| ht_batcher_spans(&mut fb, black_box(ev)))
         });
+        for (layers, id, per_pixel, batcher) in [
+            (
+                Layers::Mlab($m),
+                "mlab",
+                mlab_per_pixel_dyn as fn(&mut DynFramebuffer<'_>, &[Event]),
+                mlab_batcher_dyn as fn(&mut DynFramebuffer<'_>, &[Event]),
+            ),
+            (Layers::Hybrid($k), "ht", ht_per_pixel_dyn, ht_batcher_dyn),
+        ] {
+            let n = match layers {
+                Layers::Mlab(n) | Layers::Hybrid(n) => n,
+            };
+            let mut st = vec![Row::EMPTY; layers.rows_needed(w, h).expect("size")];
+            let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut st, w, h).expect("size");
+            $g.bench_function(BenchmarkId::new(format!("{id}_per_pixel_dyn"), n), |b| {
+                b.iter(|| per_pixel(&mut fb, black_box(ev)))
+            });
+            $g.bench_function(BenchmarkId::new(format!("{id}_batcher_dyn"), n), |b| {
+                b.iter(|| batcher(&mut fb, black_box(ev)))
+            });
+        }
         // The batcher's own work (push, quantization), the span inserts discarded: the part
         // of the batcher benches above that is not the framebuffer's insert.
         let mut st = vec![Row::EMPTY; SpanFramebuffer::<1>::rows_needed(w, h).expect("size")];
@@ -289,6 +315,11 @@ macro_rules! resolve_benches {
 fn resolve(c: &mut Criterion) {
     let events = coherent(128, 128);
     resolve_benches!(c, &events, 128, 128, 1, 2, 4, 8);
+    for (layers, id) in [(Layers::Mlab(4), "mlab_dyn"), (Layers::Hybrid(4), "ht_dyn")] {
+        let mut st = vec![Row::EMPTY; layers.rows_needed(128, 128).expect("size")];
+        let mut fb: DynFramebuffer = DynFramebuffer::new(layers, &mut st, 128, 128).expect("size");
+        resolve_all(c, id, 4, &mut fb, &events);
+    }
 }
 
 criterion_group! {
