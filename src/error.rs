@@ -2,7 +2,6 @@
 //! `Result<_, mlab::Error>` on fragment constructors and framebuffer operations alike.
 
 use crate::fragment::FragmentError;
-use crate::framebuffer::FramebufferError;
 
 /// A refused fragment or a refused framebuffer operation.
 ///
@@ -55,3 +54,67 @@ impl From<FramebufferError> for Error {
         Error::Framebuffer(e)
     }
 }
+
+/// Why a framebuffer operation was refused. Nothing was changed when one is returned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum FramebufferError {
+    /// The storage slice does not hold exactly `width * height * rows_per_pixel` rows.
+    StorageLength {
+        /// Rows required.
+        expected: usize,
+        /// Rows given.
+        actual: usize,
+    },
+    /// `width * height * rows_per_pixel` does not fit in `usize`.
+    SizeOverflow,
+    /// A coordinate lies outside the framebuffer.
+    OutOfBounds {
+        /// Column asked for.
+        x: u32,
+        /// Line asked for.
+        y: u32,
+        /// Framebuffer width.
+        width: u32,
+        /// Framebuffer height.
+        height: u32,
+    },
+    /// An output slice does not hold exactly `width * height` pixels.
+    OutputLength {
+        /// Pixels required.
+        expected: usize,
+        /// Pixels given.
+        actual: usize,
+    },
+    /// A run-time layer count that [`DynFramebuffer`](crate::DynFramebuffer) does not offer (see
+    /// [`Layers::SIZES`](crate::Layers::SIZES)).
+    UnsupportedLayers {
+        /// Rows (MLAB) or head rows (HT) asked for.
+        rows: usize,
+    },
+    /// Two framebuffers of different sizes ([`Grid::copy_from`](crate::Grid::copy_from)).
+    SizeMismatch,
+}
+
+impl core::fmt::Display for FramebufferError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            FramebufferError::StorageLength { expected, actual } => {
+                write!(f, "framebuffer storage holds {actual} rows, expected {expected}")
+            }
+            FramebufferError::SizeOverflow => f.write_str("framebuffer size overflows usize"),
+            FramebufferError::OutOfBounds { x, y, width, height } => {
+                write!(f, "pixel ({x}, {y}) is outside the {width}x{height} framebuffer")
+            }
+            FramebufferError::OutputLength { expected, actual } => {
+                write!(f, "output holds {actual} pixels, expected {expected}")
+            }
+            FramebufferError::UnsupportedLayers { rows } => {
+                write!(f, "{rows} rows per pixel is not one of the run-time sizes 1 to 8")
+            }
+            FramebufferError::SizeMismatch => f.write_str("framebuffers of different sizes"),
+        }
+    }
+}
+
+impl core::error::Error for FramebufferError {}

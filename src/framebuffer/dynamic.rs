@@ -94,6 +94,26 @@ variants! {
     H1: Ht<1>, H2: Ht<2>, H3: Ht<3>, H4: Ht<4>, H5: Ht<5>, H6: Ht<6>, H7: Ht<7>, H8: Ht<8>,
 }
 
+/// Trait methods that call the grid's own with one `match`: `ref fn` takes `&self`,
+/// `mut fn` takes `&mut self`.
+macro_rules! forward {
+    ($($kind:ident fn $name:ident($($arg:ident: $ty:ty),*) $(-> $ret:ty)?;)*) => {$(
+        forward!(@one $kind $name ($($arg: $ty),*) ($($ret)?));
+    )*};
+    (@one ref $name:ident ($($arg:ident: $ty:ty),*) ($($ret:ty)?)) => {
+        #[inline]
+        fn $name(&self $(, $arg: $ty)*) $(-> $ret)? {
+            each!(&self.0, f => f.$name($($arg),*))
+        }
+    };
+    (@one mut $name:ident ($($arg:ident: $ty:ty),*) ($($ret:ty)?)) => {
+        #[inline]
+        fn $name(&mut self $(, $arg: $ty)*) $(-> $ret)? {
+            each!(&mut self.0, f => f.$name($($arg),*))
+        }
+    };
+}
+
 /// A span framebuffer of a method and size chosen at run time ([`Layers`]), in the
 /// arithmetic `A` ([`Unbiased`] by default).
 ///
@@ -132,58 +152,20 @@ impl<'a, A: Arithmetic> Framebuffer for DynFramebuffer<'a, A> {
     where
         Self: 'b;
 
-    fn width(&self) -> u32 {
-        each!(&self.0, f => f.width())
-    }
-
-    fn height(&self) -> u32 {
-        each!(&self.0, f => f.height())
-    }
-
-    fn layers(&self) -> Layers {
-        each!(&self.0, f => f.layers())
-    }
-
-    fn clear(&mut self) {
-        each!(&mut self.0, f => f.clear())
-    }
-
-    #[inline]
-    fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
-        each!(&mut self.0, f => f.insert_row(x, y, row))
-    }
-
-    #[inline]
-    fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
-        each!(&mut self.0, f => f.insert_span(x, y, rows, mask))
-    }
-
-    fn resolve(&self, x: u32, y: u32) -> Result<Resolved, FramebufferError> {
-        each!(&self.0, f => f.resolve(x, y))
-    }
-
-    fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes> {
-        each!(&self.0, f => f.resolve_span(span, y))
-    }
-
-    fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
-        each!(&self.0, f => f.resolve_span_rgba8(span, y, background))
-    }
-
-    fn resolve_into(&self, out: &mut [glam::Vec4], background: Background) -> Result<(), FramebufferError> {
-        each!(&self.0, f => f.resolve_into(out, background))
-    }
-
-    fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
-        each!(&self.0, f => f.resolve_rgba8(out, background))
-    }
-
-    fn resolve_rgba16f(&self, out: &mut [[half::f16; 4]], background: Background) -> Result<(), FramebufferError> {
-        each!(&self.0, f => f.resolve_rgba16f(out, background))
-    }
-
-    fn as_rows(&self) -> &[Row] {
-        each!(&self.0, f => f.as_rows())
+    forward! {
+        ref fn width() -> u32;
+        ref fn height() -> u32;
+        ref fn layers() -> Layers;
+        mut fn clear();
+        mut fn insert_row(x: u32, y: u32, row: Row) -> Result<(), FramebufferError>;
+        mut fn insert_span(x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError>;
+        ref fn resolve(x: u32, y: u32) -> Result<Resolved, FramebufferError>;
+        ref fn resolve_span(span: u32, y: u32) -> Option<ResolvedLanes>;
+        ref fn resolve_span_rgba8(span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES];
+        ref fn resolve_into(out: &mut [glam::Vec4], bg: Background) -> Result<(), FramebufferError>;
+        ref fn resolve_rgba8(out: &mut [[u8; 4]], bg: Background) -> Result<(), FramebufferError>;
+        ref fn resolve_rgba16f(out: &mut [[half::f16; 4]], bg: Background) -> Result<(), FramebufferError>;
+        ref fn as_rows() -> &[Row];
     }
 
     fn reborrow(&mut self) -> DynFramebuffer<'_, A> {

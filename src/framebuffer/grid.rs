@@ -115,16 +115,23 @@ impl Arrangement for PixelMajor {
     }
 
     fn clear<P: Pixel>(rows: &mut [Row]) {
-        P::pm_clear(rows);
+        for (i, r) in rows.iter_mut().enumerate() {
+            *r = P::empty_slot(i % P::ROWS);
+        }
     }
 
     fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value> {
-        unit(rows, d.index_unchecked(x, y), P::ROWS).map(P::pm_get)
+        unit(rows, d.index_unchecked(x, y), P::ROWS)
+            .map(|px| P::from_slots(|j| px.get(j).copied().unwrap_or(Row::EMPTY)))
     }
 
     fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value) {
         if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), P::ROWS) {
-            P::pm_set(px, value);
+            P::to_slots(value, |j, r| {
+                if let Some(slot) = px.get_mut(j) {
+                    *slot = r;
+                }
+            });
         }
     }
 
@@ -185,20 +192,25 @@ impl Arrangement for Spans {
     }
 
     fn clear<P: Pixel>(rows: &mut [Row]) {
-        for span in rows.chunks_exact_mut(LANES * P::ROWS) {
-            P::span_clear(span);
+        for (i, r) in rows.iter_mut().enumerate() {
+            *r = P::empty_slot(i / LANES % P::ROWS);
         }
     }
 
     fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value> {
         let (i, lane) = d.span_lane(x, y);
-        unit(rows, i, LANES * P::ROWS).map(|s| P::span_get(s, lane))
+        unit(rows, i, LANES * P::ROWS)
+            .map(|s| P::from_slots(|j| s.get(j * LANES + lane).copied().unwrap_or(Row::EMPTY)))
     }
 
     fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value) {
         let (i, lane) = d.span_lane(x, y);
         if let Some(s) = unit_mut(rows, i, LANES * P::ROWS) {
-            P::span_set(s, lane, value);
+            P::to_slots(value, |j, r| {
+                if let Some(slot) = s.get_mut(j * LANES + lane) {
+                    *slot = r;
+                }
+            });
         }
     }
 

@@ -51,6 +51,8 @@ use crate::lanes::{FragmentLanes, InvalidLanes, LANES, ResolvedLanes};
 use crate::resolve::{Background, Resolved, to_rgba16f};
 use crate::row::Row;
 
+pub use crate::error::FramebufferError;
+
 pub use dynamic::{DynFramebuffer, Layers};
 pub use grid::{Arrangement, Grid, PixelMajor, Spans};
 pub use pixel::{Ht, Mlab, Pixel};
@@ -63,70 +65,6 @@ pub type HybridFramebuffer<'a, const K: usize, A = Unbiased> = Grid<'a, Ht<K, A>
 pub type SpanFramebuffer<'a, const M: usize, A = Unbiased> = Grid<'a, Mlab<M, A>, Spans>;
 /// Hybrid Transparency, `K` head rows and a tail per pixel, in 8-pixel spans.
 pub type HybridSpanFramebuffer<'a, const K: usize, A = Unbiased> = Grid<'a, Ht<K, A>, Spans>;
-
-/// Why a framebuffer operation was refused. Nothing was changed when one is returned.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[non_exhaustive]
-pub enum FramebufferError {
-    /// The storage slice does not hold exactly `width * height * rows_per_pixel` rows.
-    StorageLength {
-        /// Rows required.
-        expected: usize,
-        /// Rows given.
-        actual: usize,
-    },
-    /// `width * height * rows_per_pixel` does not fit in `usize`.
-    SizeOverflow,
-    /// A coordinate lies outside the framebuffer.
-    OutOfBounds {
-        /// Column asked for.
-        x: u32,
-        /// Line asked for.
-        y: u32,
-        /// Framebuffer width.
-        width: u32,
-        /// Framebuffer height.
-        height: u32,
-    },
-    /// An output slice does not hold exactly `width * height` pixels.
-    OutputLength {
-        /// Pixels required.
-        expected: usize,
-        /// Pixels given.
-        actual: usize,
-    },
-    /// A run-time layer count that [`DynFramebuffer`] does not offer (see
-    /// [`Layers::SIZES`]).
-    UnsupportedLayers {
-        /// Rows (MLAB) or head rows (HT) asked for.
-        rows: usize,
-    },
-    /// Two framebuffers of different sizes ([`Grid::copy_from`]).
-    SizeMismatch,
-}
-
-impl core::fmt::Display for FramebufferError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        match *self {
-            FramebufferError::StorageLength { expected, actual } => {
-                write!(f, "framebuffer storage holds {actual} rows, expected {expected}")
-            }
-            FramebufferError::SizeOverflow => f.write_str("framebuffer size overflows usize"),
-            FramebufferError::OutOfBounds { x, y, width, height } => {
-                write!(f, "pixel ({x}, {y}) is outside the {width}x{height} framebuffer")
-            }
-            FramebufferError::OutputLength { expected, actual } => {
-                write!(f, "output holds {actual} pixels, expected {expected}")
-            }
-            FramebufferError::UnsupportedLayers { rows } => {
-                write!(f, "{rows} rows per pixel is not one of the run-time sizes 1 to 8")
-            }
-            FramebufferError::SizeMismatch => f.write_str("framebuffers of different sizes"),
-        }
-    }
-}
-
-impl core::error::Error for FramebufferError {}
 
 /// Width, height and spans per line, with the checks shared by every framebuffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -59,12 +59,15 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// Whether the pixel's HT tail has a field at its maximum (never for MLAB).
     fn saturated(value: &Self::Value) -> bool;
 
+    /// The value from its slots (`slot(j)` for `j` in `0..ROWS`; HT: the tail's bytes last).
     #[doc(hidden)]
-    fn pm_clear(rows: &mut [Row]);
+    fn from_slots(slot: impl Fn(usize) -> Row) -> Self::Value;
+    /// The slots of a value, in order.
     #[doc(hidden)]
-    fn pm_get(px: &[Row]) -> Self::Value;
+    fn to_slots(value: Self::Value, put: impl FnMut(usize, Row));
+    /// Slot `j` of an empty pixel.
     #[doc(hidden)]
-    fn pm_set(px: &mut [Row], value: Self::Value);
+    fn empty_slot(j: usize) -> Row;
     #[doc(hidden)]
     fn pm_insert(px: &mut [Row], row: Row);
     #[doc(hidden)]
@@ -76,12 +79,6 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// The whole spans of one line (`line`: its pixels' rows), into `out`.
     #[doc(hidden)]
     fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background);
-    #[doc(hidden)]
-    fn span_clear(span: &mut [Row]);
-    #[doc(hidden)]
-    fn span_get(span: &[Row], lane: usize) -> Self::Value;
-    #[doc(hidden)]
-    fn span_set(span: &mut [Row], lane: usize, value: Self::Value);
     #[doc(hidden)]
     fn span_insert(span: &mut [Row], lane: usize, row: Row);
     #[doc(hidden)]
@@ -173,18 +170,16 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
         false
     }
 
-    fn pm_clear(rows: &mut [Row]) {
-        rows.fill(Row::EMPTY);
+    fn from_slots(slot: impl Fn(usize) -> Row) -> [Row; M] {
+        core::array::from_fn(slot)
     }
 
-    fn pm_get(px: &[Row]) -> [Row; M] {
-        px.first_chunk().copied().unwrap_or([Row::EMPTY; M])
+    fn to_slots(value: [Row; M], mut put: impl FnMut(usize, Row)) {
+        value.into_iter().enumerate().for_each(|(j, r)| put(j, r));
     }
 
-    fn pm_set(px: &mut [Row], value: [Row; M]) {
-        if let Some(p) = px.first_chunk_mut() {
-            *p = value;
-        }
+    fn empty_slot(_: usize) -> Row {
+        Row::EMPTY
     }
 
     #[inline(always)]
@@ -223,21 +218,6 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
         for (o, px) in out.iter_mut().zip(line.as_chunks::<M>().0.as_chunks::<LANES>().0) {
             *o = lanes::mlab_resolve_pixel_major_rgba8(px, background);
-        }
-    }
-
-    fn span_clear(span: &mut [Row]) {
-        span.fill(Row::EMPTY);
-    }
-
-    fn span_get(span: &[Row], lane: usize) -> [Row; M] {
-        let l = layers::<M>(span);
-        core::array::from_fn(|j| l.and_then(|l| l[j].get(lane)).copied().unwrap_or(Row::EMPTY))
-    }
-
-    fn span_set(span: &mut [Row], lane: usize, value: [Row; M]) {
-        if let Some(l) = layers_mut::<M>(span) {
-            with_lane(l, lane, |px| *px = value);
         }
     }
 
@@ -349,34 +329,17 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         value.1.saturated()
     }
 
-    fn pm_clear(rows: &mut [Row]) {
-        for p in rows.chunks_exact_mut(K + 1) {
-            if let Some((t, h)) = p.split_last_mut() {
-                h.fill(Row::EMPTY);
-                *t = Self::empty_tail();
-            }
-        }
+    fn from_slots(slot: impl Fn(usize) -> Row) -> Self::Value {
+        (core::array::from_fn(&slot), A::Tail::from_bytes(slot(K).to_bytes()))
     }
 
-    fn pm_get(px: &[Row]) -> Self::Value {
-        let mut head = [Row::EMPTY; K];
-        let mut tail = A::Tail::EMPTY;
-        if let Some((t, h)) = px.split_last()
-            && let Some(h) = h.first_chunk::<K>()
-        {
-            head = *h;
-            tail = A::Tail::from_bytes(t.to_bytes());
-        }
-        (head, tail)
+    fn to_slots((head, tail): Self::Value, mut put: impl FnMut(usize, Row)) {
+        head.into_iter().enumerate().for_each(|(j, r)| put(j, r));
+        put(K, Row::from_bytes(tail.to_bytes()));
     }
 
-    fn pm_set(px: &mut [Row], (head, tail): Self::Value) {
-        if let Some((t, h)) = px.split_last_mut()
-            && let Some(h) = h.first_chunk_mut::<K>()
-        {
-            *h = head;
-            *t = Row::from_bytes(tail.to_bytes());
-        }
+    fn empty_slot(j: usize) -> Row {
+        if j < K { Row::EMPTY } else { Self::empty_tail() }
     }
 
     #[inline(always)]
@@ -417,31 +380,6 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
         for (o, px) in out.iter_mut().zip(line.chunks_exact(LANES * (K + 1))) {
             *o = Self::pm_resolve_span_rgba8(px, background);
-        }
-    }
-
-    fn span_clear(span: &mut [Row]) {
-        let (head, tails) = span.split_at_mut(K * LANES);
-        head.fill(Row::EMPTY);
-        tails.fill(Self::empty_tail());
-    }
-
-    fn span_get(span: &[Row], lane: usize) -> Self::Value {
-        match Self::parts(span) {
-            Some((head, tails)) => (
-                core::array::from_fn(|j| head[j].get(lane).copied().unwrap_or(Row::EMPTY)),
-                tails.get(lane).copied().unwrap_or(A::Tail::EMPTY),
-            ),
-            None => ([Row::EMPTY; K], A::Tail::EMPTY),
-        }
-    }
-
-    fn span_set(span: &mut [Row], lane: usize, (h, t): Self::Value) {
-        if let Some((head, tails)) = Self::parts_mut(span)
-            && let Some(tail) = tails.get_mut(lane)
-        {
-            *tail = t;
-            with_lane(head, lane, |px| *px = h);
         }
     }
 
