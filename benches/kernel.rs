@@ -120,9 +120,9 @@ fn mlab_lanes_pixel_major<const M: usize>(pixels: &mut [[Row; M]], stream: &[Ste
         let chunk: &mut [[Row; M]; LANES] = (&mut pixels[s.span * LANES..(s.span + 1) * LANES])
             .try_into()
             .expect("8 pixels");
-        let mut span = lanes::from_pixel_major(chunk);
+        let mut span = from_pixel_major(chunk);
         lanes::mlab_insert_with::<mlab::Unbiased, _>(&mut span, &s.rows, s.mask);
-        *chunk = lanes::to_pixel_major(&span);
+        *chunk = to_pixel_major(&span);
     }
 }
 
@@ -235,11 +235,11 @@ macro_rules! hybrid_group {
         {
             let mut pixels = vec![([Row::EMPTY; $k], mlab::Tail::EMPTY); W * H];
             $g.bench_function(BenchmarkId::new("ht_scalar", $k), |b| b.iter(|| hybrid_scalar(&mut pixels, black_box($stream))));
-            let mut spans = vec![HybridSpan::<$k>::new(); SPANS];
+            let mut spans = vec![HybridSpan::<$k>::default(); SPANS];
             $g.bench_function(BenchmarkId::new("ht_lanes", $k), |b| b.iter(|| hybrid_lanes(&mut spans, black_box($stream))));
             let mut pixels = vec![([Row::EMPTY; $k], hybrid::PaperTail::EMPTY); W * H];
             $g.bench_function(BenchmarkId::new("ht_scalar_paper", $k), |b| b.iter(|| hybrid_scalar(&mut pixels, black_box($stream))));
-            let mut spans = vec![HybridSpan::<$k, Paper>::new(); SPANS];
+            let mut spans = vec![HybridSpan::<$k, Paper>::default(); SPANS];
             $g.bench_function(BenchmarkId::new("ht_lanes_paper", $k), |b| b.iter(|| hybrid_lanes(&mut spans, black_box($stream))));
         }
     )*};
@@ -315,7 +315,7 @@ fn resolve(c: &mut Criterion) {
     mlab_scalar::<Unbiased, 4>(&mut pixels, &stream);
     let spans: Vec<MlabSpan<4>> = pixels
         .chunks_exact(LANES)
-        .map(|c| lanes::from_pixel_major(c.try_into().expect("8 pixels")))
+        .map(|c| from_pixel_major(c.try_into().expect("8 pixels")))
         .collect();
     let bg = Background::Opaque(mlab::glam::Vec3::new(0.2, 0.3, 0.4));
     let mut out = vec![[0u8; 4]; W * H];
@@ -329,7 +329,7 @@ fn resolve(c: &mut Criterion) {
     });
     let mut hp = vec![([Row::EMPTY; 3], mlab::Tail::EMPTY); W * H];
     hybrid_scalar(&mut hp, &stream);
-    let mut hs = vec![HybridSpan::<3>::new(); SPANS];
+    let mut hs = vec![HybridSpan::<3>::default(); SPANS];
     hybrid_lanes(&mut hs, &stream);
     g.bench_function(BenchmarkId::new("ht_scalar", 3), |b| {
         b.iter(|| {
@@ -354,3 +354,14 @@ criterion_group! {
     targets = insert, insert_small, resolve
 }
 criterion_main!(benches);
+
+/// The span in the per-pixel arrangement, `[pixel][row]` (a transpose).
+fn to_pixel_major<const M: usize>(span: &[[Row; LANES]; M]) -> [[Row; M]; LANES] {
+    core::array::from_fn(|lane| core::array::from_fn(|j| span[j][lane]))
+}
+
+/// The inverse of [`to_pixel_major`].
+#[allow(dead_code)]
+fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> [[Row; LANES]; M] {
+    core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
+}

@@ -39,8 +39,8 @@ fn fail(context: String) -> impl FnOnce(String) -> TestCaseError {
 /// every byte after every step, then the resolve (`mlab_reference::lanes::check_mlab_span`:
 /// bit for bit, RGBA8 and pixels on every background).
 fn check_mlab<A: Model, const M: usize>(initial: &[[Row; M]; LANES], stream: &[Step]) -> Result<(), TestCaseError> {
-    let mut span = lanes::from_pixel_major(initial);
-    prop_assert_eq!(&lanes::to_pixel_major(&span), initial, "lossless conversion");
+    let mut span = from_pixel_major(initial);
+    prop_assert_eq!(&to_pixel_major(&span), initial, "lossless conversion");
     let mut pixels = *initial;
     for (rows, mask) in stream {
         lanes::mlab_insert_with::<A, M>(&mut span, rows, *mask);
@@ -86,9 +86,9 @@ fn check_arithmetic<A: Model>(stream: &[Step], garbage: &[u64]) -> Result<(), Te
     check_mlab::<A, 3>(&[[Row::EMPTY; 3]; LANES], stream)?;
     check_mlab::<A, 4>(&[[Row::EMPTY; 4]; LANES], stream)?;
     check_mlab::<A, 8>(&[[Row::EMPTY; 8]; LANES], stream)?;
-    check_hybrid::<1, A>(&HybridSpan::new(), stream)?;
-    check_hybrid::<3, A>(&HybridSpan::new(), stream)?;
-    check_hybrid::<7, A>(&HybridSpan::new(), stream)?;
+    check_hybrid::<1, A>(&HybridSpan::default(), stream)?;
+    check_hybrid::<3, A>(&HybridSpan::default(), stream)?;
+    check_hybrid::<7, A>(&HybridSpan::default(), stream)?;
     // From arbitrary bytes (as read back from a GPU buffer).
     let row = |i: usize| Row::from_bytes(garbage[i % garbage.len()].wrapping_mul(i as u64 + 1).to_le_bytes());
     let tail = |i: usize| A::Tail::from_bytes(garbage[(i + 7) % garbage.len()].rotate_left(i as u32).to_le_bytes());
@@ -98,9 +98,10 @@ fn check_arithmetic<A: Model>(stream: &[Step], garbage: &[u64]) -> Result<(), Te
             stream,
         )?;
         check_mlab::<A, 1>(&core::array::from_fn(|l| [row(l)]), stream)?;
-        let mut h = HybridSpan::<3, A>::new();
-        h.head = core::array::from_fn(|j| core::array::from_fn(|l| row(100 + j * 8 + l)));
-        h.tails = core::array::from_fn(tail);
+        let h = HybridSpan::<3, A> {
+            head: core::array::from_fn(|j| core::array::from_fn(|l| row(100 + j * 8 + l))),
+            tails: core::array::from_fn(tail),
+        };
         check_hybrid::<3, A>(&h, stream)?;
     }
     Ok(())
@@ -221,4 +222,15 @@ fn edge_case_table() {
         check_all(&stream, &[0x7fc0_0000_0000_0000, 0xffff_ffff_ffff_ffff, 0])
             .unwrap_or_else(|e| panic!("{name}: {e}"));
     }
+}
+
+/// The span in the per-pixel arrangement, `[pixel][row]` (a transpose).
+fn to_pixel_major<const M: usize>(span: &[[Row; LANES]; M]) -> [[Row; M]; LANES] {
+    core::array::from_fn(|lane| core::array::from_fn(|j| span[j][lane]))
+}
+
+/// The inverse of [`to_pixel_major`].
+#[allow(dead_code)]
+fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> [[Row; LANES]; M] {
+    core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
 }

@@ -538,9 +538,9 @@ fn lanes_invalid_fragments_and_off_lanes() {
     lanes::mlab_insert_with::<Paper, 2>(&mut span, &q.rows, q.valid);
     assert_eq!(span[0][0], Row::new([128, 64, 0], 127, 1.0));
     assert!((1..LANES).all(|lane| span[0][lane] == garbage && span[1][lane] == garbage));
-    let mut ht = HybridSpan::<1>::new();
+    let mut ht = HybridSpan::<1>::default();
     lanes::hybrid_insert(&mut ht, &[garbage; LANES], 0);
-    assert_eq!(ht, HybridSpan::<1>::new());
+    assert_eq!(ht, HybridSpan::<1>::default());
 }
 
 #[test]

@@ -127,7 +127,7 @@ fn mlab_stream_m<const M: usize, A: Model>(input: &mut Input) {
             }
         }
         assert_eq!(
-            lanes::to_pixel_major(&span),
+            to_pixel_major(&span),
             lane_arrays,
             "M = {M} {name}: lanes differ from scalar, mask {mask:#010b}"
         );
@@ -188,7 +188,7 @@ fn hybrid_stream_a<A: Model>(sel: u8, mut input: Input) {
 fn hybrid_stream_k<const K: usize, A: Model>(input: &mut Input) {
     let name = A::NAME;
     let mut ht = Hybrid::<K, A>::new();
-    let mut span = HybridSpan::<K, A>::new();
+    let mut span = HybridSpan::<K, A>::default();
     let mut lane_px = [Hybrid::<K, A>::new(); LANES];
     let mut frags = Vec::new();
     let mut rows = Vec::new();
@@ -524,7 +524,7 @@ fn garbage_mlab<const M: usize, A: Model>(input: &mut Input) {
             rows8[lane] = p[lane % M];
         }
     }
-    let mut span = lanes::from_pixel_major(&pixels);
+    let mut span = from_pixel_major(&pixels);
     lanes_ok(check_mlab_span(&span, &pixels));
     lanes::mlab_insert_with::<A, _>(&mut span, &rows8, mask);
     for (lane, p) in pixels.iter_mut().enumerate() {
@@ -533,7 +533,7 @@ fn garbage_mlab<const M: usize, A: Model>(input: &mut Input) {
         }
     }
     assert_eq!(
-        lanes::to_pixel_major(&span),
+        to_pixel_major(&span),
         pixels,
         "{name}: lanes insert on garbage rows {rows:?}, mask {mask:#010b}"
     );
@@ -628,7 +628,7 @@ fn garbage_hybrid<const K: usize, A: Model>(input: &mut Input) {
         tb.rotate_left(lane);
         *p = Hybrid::from_parts(hd, <A::Tail as TailFormat>::from_bytes(tb));
     }
-    let mut span = HybridSpan::<K, A>::new();
+    let mut span = HybridSpan::<K, A>::default();
     for (lane, p) in pixels.iter().enumerate() {
         for j in 0..K {
             span.head[j][lane] = p.head()[j];
@@ -1197,4 +1197,15 @@ fn spans<L: Layout>(input: &mut Input) {
             );
         }
     }
+}
+
+/// The span in the per-pixel arrangement, `[pixel][row]` (a transpose).
+fn to_pixel_major<const M: usize>(span: &[[Row; LANES]; M]) -> [[Row; M]; LANES] {
+    core::array::from_fn(|lane| core::array::from_fn(|j| span[j][lane]))
+}
+
+/// The inverse of [`to_pixel_major`].
+#[allow(dead_code)]
+fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> [[Row; LANES]; M] {
+    core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
 }

@@ -73,7 +73,7 @@ pub fn check_resolved_lanes(got: &ResolvedLanes, want: &[Resolved; LANES]) -> Re
 
 /// An MLAB span against 8 scalar arrays, byte for byte.
 pub fn check_mlab_rows<const M: usize>(span: &MlabSpan<M>, pixels: &[[Row; M]; LANES]) -> Result<(), String> {
-    let got = lanes::to_pixel_major(span);
+    let got = to_pixel_major(span);
     for (lane, (g, p)) in got.iter().zip(pixels).enumerate() {
         ensure!(g == p, "M = {M} lane {lane}: lanes {g:?}, scalar {p:?}");
     }
@@ -238,4 +238,15 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
         );
     }
     check_hybrid_span(&hspan, &hexpected)
+}
+
+/// The span in the per-pixel arrangement, `[pixel][row]` (a transpose).
+fn to_pixel_major<const M: usize>(span: &[[Row; LANES]; M]) -> [[Row; M]; LANES] {
+    core::array::from_fn(|lane| core::array::from_fn(|j| span[j][lane]))
+}
+
+/// The inverse of [`to_pixel_major`].
+#[allow(dead_code)]
+fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> [[Row; LANES]; M] {
+    core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
 }

@@ -11,8 +11,8 @@
 //! line when the span is 64-byte aligned), and each SIMD register holds four whole rows in
 //! its four 64-bit lanes. Nothing is deinterleaved to insert: the depth test is an f32
 //! compare whose result in the odd (depth) dword is widened to the whole 64-bit lane, and the
-//! swap of Listing 1 is two selects of whole rows. [`to_pixel_major`] and [`from_pixel_major`]
-//! convert losslessly to and from the per-pixel `[Row; M]` arrangement of
+//! swap of Listing 1 is two selects of whole rows. [`Grid::copy_from`](crate::Grid::copy_from)
+//! converts framebuffers losslessly between it and the per-pixel `[Row; M]` arrangement of
 //! [`MlabFramebuffer`](crate::MlabFramebuffer); `docs/performance.md` measures the two.
 //!
 //! # One algorithm, two widths
@@ -87,19 +87,13 @@ pub struct HybridSpan<const K: usize, A: Arithmetic = Unbiased> {
     pub tails: [A::Tail; LANES],
 }
 
-impl<const K: usize, A: Arithmetic> HybridSpan<K, A> {
+impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
     /// Empty heads and tails.
-    pub const fn new() -> Self {
+    fn default() -> Self {
         HybridSpan {
             head: [[Row::EMPTY; LANES]; K],
             tails: [A::Tail::EMPTY; LANES],
         }
-    }
-}
-
-impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
-    fn default() -> Self {
-        Self::new()
     }
 }
 
@@ -250,14 +244,4 @@ pub(crate) fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
     tails: &[T; LANES],
 ) -> ResolvedLanes {
     x8::hybrid_resolve(head, tails).lanes()
-}
-
-/// The same span in the per-pixel arrangement: `[pixel][row]`.
-pub fn to_pixel_major<const M: usize>(span: &MlabSpan<M>) -> [[Row; M]; LANES] {
-    core::array::from_fn(|lane| core::array::from_fn(|j| span[j][lane]))
-}
-
-/// The inverse of [`to_pixel_major`].
-pub fn from_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> MlabSpan<M> {
-    core::array::from_fn(|j| core::array::from_fn(|lane| pixels[lane][j]))
 }
