@@ -287,5 +287,10 @@ fn new_methods_memory_is_what_they_store() {
     assert_eq!((m6.name().as_str(), m6.paper_bits()), ("MBOIT 6 power 16-bit", 112));
     assert_eq!(Method::Mboit(m6).bytes_per_pixel(&b), 14.0 + 8.0);
     assert_eq!(Method::Mboit(Moments::ALL[7]).bytes_per_pixel(&b), 28.0 + 8.0);
+    // AT stores every fragment, as the A-buffer: 12 B each + a 4 B head.
+    for n in [2, 4, 8] {
+        assert_eq!(Method::Adaptive(n).bytes_per_pixel(&b), 4.0 + 12.0 * 2.0);
+        assert_eq!(Method::Adaptive(n).storage(), Method::Reference.storage());
+    }
     assert!(Method::KClosest(9).render(&b).is_err());
 }

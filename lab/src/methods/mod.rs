@@ -236,7 +236,7 @@ impl Method {
             per_fragment: 0,
         };
         match self {
-            Method::Reference => Storage {
+            Method::Reference | Method::Adaptive(_) => Storage {
                 per_pixel: 4,
                 per_fragment: 12,
             },
@@ -245,7 +245,6 @@ impl Method {
             Method::Over | Method::Under | Method::Meshkin => per_pixel(8),
             Method::Wboit(_) => per_pixel(9),
             Method::BavoilMyers => per_pixel(12),
-            Method::Adaptive(n) => per_pixel(8 * n + 8),
             Method::Mboit(m) => per_pixel(m.bytes_per_pixel()),
             Method::KClosest(k) => per_pixel(4 * k + 4),
         }
