@@ -187,6 +187,11 @@ impl Method {
         v.extend(Weight::ALL.map(Method::Wboit));
         v.push(Method::BavoilMyers);
         v.push(Method::Meshkin);
+        // Issue 25's peers, one each (every variant is in `oit-lab peers`): K-closest with 4
+        // layers (20 B/px) and the paper's 6 power moments at 16 bit (112 bits + the RGBA16F
+        // target, 22 B/px).
+        v.push(Method::KClosest(4));
+        v.push(Method::Mboit(Moments::new(MomentKind::Power6, true)));
         v
     }
 

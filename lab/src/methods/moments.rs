@@ -195,8 +195,9 @@ pub fn circle_parameter(x: f64, y: f64) -> f64 {
 pub fn features(m: Moments, z: f32) -> [f32; 6] {
     let mut f = [0.0f32; 6];
     if m.trig() {
-        let wz = wrapping_zone();
-        let phase = z * wz[1] as f32 + wz[1] as f32;
+        // wz.y = pi - angle / 2 (wrapping_zone()[1]).
+        let wy = (std::f64::consts::PI - 0.5 * WRAPPING_ZONE_ANGLE) as f32;
+        let phase = z * wy + wy;
         let (s, c) = phase.sin_cos();
         let (mut re, mut im) = (c, s);
         for k in 0..m.values() / 2 {
@@ -247,19 +248,13 @@ fn mat<const N: usize>(v: [f32; N], g: &[[f32; N]; N]) -> [f32; N] {
     std::array::from_fn(|j| (0..N).map(|i| v[i] * g[i][j]).sum())
 }
 
-/// Apply `odd` and `even` to the moment vector `b = (b1, b2, ...)` of `values` entries.
-fn split_apply(
-    b: [f32; 6],
-    values: usize,
-    odd: impl Fn(&[f32]) -> Vec<f32>,
-    even: impl Fn(&[f32]) -> Vec<f32>,
-) -> [f32; 6] {
-    let n = values / 2;
-    let o: Vec<f32> = (0..n).map(|i| b[2 * i]).collect();
-    let e: Vec<f32> = (0..n).map(|i| b[2 * i + 1]).collect();
-    let (o, e) = (odd(&o), even(&e));
+/// Apply the matrices `odd` (to `b1, b3, ..`) and `even` (to `b2, b4, ..`) to the moment
+/// vector `b = (b1, b2, ...)`.
+fn split_apply<const N: usize>(b: [f32; 6], odd: &[[f32; N]; N], even: &[[f32; N]; N]) -> [f32; 6] {
+    let o = mat::<N>(std::array::from_fn(|i| b[2 * i]), odd);
+    let e = mat::<N>(std::array::from_fn(|i| b[2 * i + 1]), even);
     let mut out = [0.0f32; 6];
-    for i in 0..n {
+    for i in 0..N {
         out[2 * i] = o[i];
         out[2 * i + 1] = e[i];
     }
@@ -269,36 +264,16 @@ fn split_apply(
 /// The 16-bit quantization of power moments `(b1, b2, ...)` (no offset).
 pub fn quantize(m: Moments, b: [f32; 6]) -> [f32; 6] {
     match m.kind {
-        MomentKind::Power4 => split_apply(
-            b,
-            4,
-            |o| mat([o[0], o[1]], &Q4_ODD).to_vec(),
-            |e| mat([e[0], e[1]], &Q4_EVEN).to_vec(),
-        ),
-        _ => split_apply(
-            b,
-            6,
-            |o| mat([o[0], o[1], o[2]], &Q6_ODD).to_vec(),
-            |e| mat([e[0], e[1], e[2]], &Q6_EVEN).to_vec(),
-        ),
+        MomentKind::Power4 => split_apply(b, &Q4_ODD, &Q4_EVEN),
+        _ => split_apply(b, &Q6_ODD, &Q6_EVEN),
     }
 }
 
 /// The inverse of [`quantize`].
 pub fn dequantize(m: Moments, q: [f32; 6]) -> [f32; 6] {
     match m.kind {
-        MomentKind::Power4 => split_apply(
-            q,
-            4,
-            |o| mat([o[0], o[1]], &D4_ODD).to_vec(),
-            |e| mat([e[0], e[1]], &D4_EVEN).to_vec(),
-        ),
-        _ => split_apply(
-            q,
-            6,
-            |o| mat([o[0], o[1], o[2]], &D6_ODD).to_vec(),
-            |e| mat([e[0], e[1], e[2]], &D6_EVEN).to_vec(),
-        ),
+        MomentKind::Power4 => split_apply(q, &D4_ODD, &D4_EVEN),
+        _ => split_apply(q, &D6_ODD, &D6_EVEN),
     }
 }
 
@@ -383,70 +358,107 @@ impl MomentState {
         v.map(f64::from)
     }
 
-    /// The reconstructed transmittance at warped depth `z` (the second pass). Where the f64
-    /// reconstruction meets a root exactly at `z` (0 / 0 in the divided differences: one
-    /// fragment, or all at one depth) it is evaluated `1e-7` behind `z` instead (the shaders'
-    /// f32 rounding never lands exactly there); still not finite: 0 (HLSL `saturate(NaN)`).
-    pub fn transmittance_at(&self, m: Moments, z: f32) -> f32 {
-        let t = self.transmittance_exactly_at(m, z as f64);
-        if t.is_finite() {
-            return t as f32;
-        }
-        let t = self.transmittance_exactly_at(m, z as f64 + 1e-7);
-        if t.is_finite() { t as f32 } else { 0.0 }
-    }
-
-    fn transmittance_exactly_at(&self, m: Moments, z: f64) -> f64 {
+    /// The second pass's reconstruction for this pixel.
+    pub fn resolver(&self, m: Moments) -> Resolver {
         let b = self.normalized(m);
         let b0 = self.b0 as f64;
         if m.trig() {
-            trig_transmittance(b0, &b[..m.values()], z, m.bias(), OVERESTIMATION)
-        } else {
-            let bias_vector: &[f64] = match (m.kind, m.half) {
-                (MomentKind::Power4, false) => &[0.0, 0.375, 0.0, 0.375],
-                (MomentKind::Power4, true) => &[0.0, 0.628, 0.0, 0.628],
-                (_, false) => &[0.0, 0.48, 0.0, 0.451, 0.0, 0.45],
-                (_, true) => &[0.0, 0.5566, 0.0, 0.489, 0.0, 0.478_693_82],
-            };
-            power_transmittance(b0, &b[..m.values()], bias_vector, z, m.bias(), OVERESTIMATION)
+            return Resolver::trig(b0, &b[..m.values()], m.bias(), OVERESTIMATION);
         }
+        let bias_vector: &[f64] = match (m.kind, m.half) {
+            (MomentKind::Power4, false) => &[0.0, 0.375, 0.0, 0.375],
+            (MomentKind::Power4, true) => &[0.0, 0.628, 0.0, 0.628],
+            (_, false) => &[0.0, 0.48, 0.0, 0.451, 0.0, 0.45],
+            (_, true) => &[0.0, 0.5566, 0.0, 0.489, 0.0, 0.478_693_82],
+        };
+        Resolver::power(b0, &b[..m.values()], bias_vector, m.bias(), OVERESTIMATION)
+    }
+
+    /// The reconstructed transmittance at warped depth `z` ([`Resolver::at`]); see
+    /// [`transmittance`].
+    pub fn transmittance_at(&self, m: Moments, z: f32) -> f32 {
+        transmittance(&self.resolver(m), z)
     }
 }
 
-/// Solve `a x = y` (n <= 4) by Gaussian elimination with partial pivoting.
-fn solve<T: Field>(mut a: [[T; 4]; 4], mut y: [T; 4], n: usize) -> [T; 4] {
-    for col in 0..n {
-        let p = (col..n)
-            .max_by(|&i, &j| a[i][col].norm().total_cmp(&a[j][col].norm()))
-            .unwrap_or(col);
-        a.swap(col, p);
-        y.swap(col, p);
-        let d = a[col][col];
-        for r in col + 1..n {
-            let f = a[r][col].div(d);
-            for c in col..n {
-                a[r][c] = a[r][c].sub(f.mul(a[col][c]));
+/// The reconstructed transmittance at warped depth `z`. Where the f64 reconstruction meets a
+/// root exactly at `z` (0 / 0 in the divided differences: one fragment, or all at one depth)
+/// it is evaluated `1e-7` behind `z` instead (the shaders' f32 rounding never lands exactly
+/// there); still not finite: 0 (HLSL `saturate(NaN)`).
+pub fn transmittance(r: &Resolver, z: f32) -> f32 {
+    let t = r.at(z as f64);
+    if t.is_finite() {
+        return t as f32;
+    }
+    let t = r.at(z as f64 + 1e-7);
+    if t.is_finite() { t as f32 } else { 0.0 }
+}
+
+/// An LU factorization with partial pivoting of an `n x n` matrix (n <= 4): factored once per
+/// pixel, solved once per fragment.
+#[derive(Clone, Copy, Debug)]
+pub struct Lu<T> {
+    lu: [[T; 4]; 4],
+    perm: [usize; 4],
+    n: usize,
+}
+
+impl<T: Field> Lu<T> {
+    fn new(mut a: [[T; 4]; 4], n: usize) -> Lu<T> {
+        let mut perm = [0, 1, 2, 3];
+        for col in 0..n {
+            let mut p = col;
+            for r in col + 1..n {
+                if a[r][col].norm() > a[p][col].norm() {
+                    p = r;
+                }
             }
-            y[r] = y[r].sub(f.mul(y[col]));
+            a.swap(col, p);
+            perm.swap(col, p);
+            let d = a[col][col];
+            for r in col + 1..n {
+                let f = a[r][col].div(d);
+                a[r][col] = f;
+                for c in col + 1..n {
+                    a[r][c] = a[r][c].sub(f.mul(a[col][c]));
+                }
+            }
         }
+        Lu { lu: a, perm, n }
     }
-    let mut x = [T::ZERO; 4];
-    for r in (0..n).rev() {
-        let mut s = y[r];
-        for c in r + 1..n {
-            s = s.sub(a[r][c].mul(x[c]));
+
+    fn solve(&self, y: [T; 4]) -> [T; 4] {
+        let n = self.n;
+        let mut x = [T::ZERO; 4];
+        for r in 0..n {
+            let mut s = y[self.perm[r]];
+            for c in 0..r {
+                s = s.sub(self.lu[r][c].mul(x[c]));
+            }
+            x[r] = s;
         }
-        x[r] = s.div(a[r][r]);
+        for r in (0..n).rev() {
+            let mut s = x[r];
+            for c in r + 1..n {
+                s = s.sub(self.lu[r][c].mul(x[c]));
+            }
+            x[r] = s.div(self.lu[r][r]);
+        }
+        x
     }
-    x
 }
 
-/// The arithmetic [`solve`] and the divided differences need (f64 and complex).
-trait Field: Copy {
+/// The arithmetic [`Lu`] and the divided differences need (f64 and complex).
+pub trait Field: Copy {
+    /// Zero.
     const ZERO: Self;
+    /// `self - o`.
     fn sub(self, o: Self) -> Self;
+    /// `self * o`.
     fn mul(self, o: Self) -> Self;
+    /// `self / o`.
     fn div(self, o: Self) -> Self;
+    /// The magnitude (pivoting).
     fn norm(self) -> f64;
 }
 
@@ -509,7 +521,10 @@ impl Field for C64 {
 /// shaders), in the monomial basis: `p[k]` multiplies `z^k`.
 fn interpolate<T: Field + From1>(z: &[T], f: &[f64]) -> [T; 4] {
     let n = z.len();
-    let mut d: Vec<T> = f.iter().map(|&v| T::from1(v)).collect();
+    let mut d = [T::ZERO; 4];
+    for (di, &v) in d.iter_mut().zip(f) {
+        *di = T::from1(v);
+    }
     for level in 1..n {
         for i in (level..n).rev() {
             d[i] = d[i].sub(d[i - 1]).div(z[i].sub(z[i - level]));
@@ -558,12 +573,12 @@ impl From1 for C64 {
 }
 
 /// The real roots of `c0 + c1 x + c2 x^2 (+ c3 x^3)` (two or three real roots assumed, as
-/// the shaders assume).
-fn real_roots(c: &[f64]) -> Vec<f64> {
+/// the shaders assume): the roots and their count.
+fn real_roots(c: &[f64]) -> ([f64; 3], usize) {
     if c.len() == 3 {
         let (p, q) = (c[1] / c[2], c[0] / c[2]);
         let r = (p * p * 0.25 - q).max(0.0).sqrt();
-        return vec![-p * 0.5 - r, -p * 0.5 + r];
+        return ([-p * 0.5 - r, -p * 0.5 + r, 0.0], 2);
     }
     let (a, b, cc) = (c[2] / c[3], c[1] / c[3], c[0] / c[3]);
     let p = b - a * a / 3.0;
@@ -573,138 +588,229 @@ fn real_roots(c: &[f64]) -> Vec<f64> {
         // One real root (a degenerate case the shaders do not handle): repeat it.
         let disc = (q * q / 4.0 + p * p * p / 27.0).max(0.0).sqrt();
         let t = (-q / 2.0 + disc).cbrt() + (-q / 2.0 - disc).cbrt();
-        return vec![t + shift; 3];
+        return ([t + shift; 3], 3);
     }
     let m = 2.0 * (-p / 3.0).sqrt();
     let arg = (3.0 * q / (p * m)).clamp(-1.0, 1.0);
     let theta = arg.acos() / 3.0;
-    (0..3)
-        .map(|k| m * (theta - 2.0 * std::f64::consts::PI * k as f64 / 3.0).cos() + shift)
-        .collect()
+    let third = 2.0 * std::f64::consts::PI / 3.0;
+    (std::array::from_fn(|k| m * (theta - third * k as f64).cos() + shift), 3)
 }
 
-/// The complex roots of `sum c_k x^k` (degree 2 or 3).
-fn complex_roots(c: &[C64]) -> Vec<C64> {
+/// A cube root of a complex number (the principal one).
+fn cbrt_c(z: C64) -> C64 {
+    let r = z.norm().cbrt();
+    let a = z.1.atan2(z.0) / 3.0;
+    C64(r * a.cos(), r * a.sin())
+}
+
+/// The complex roots of `sum c_k x^k` (degree 2 or 3, closed forms: the quadratic formula,
+/// Cardano's for the cubic, each cubic root polished by two Newton steps).
+fn complex_roots(c: &[C64]) -> ([C64; 3], usize) {
     let n = c.len() - 1;
     let lead = c[n];
-    let monic: Vec<C64> = c.iter().map(|&v| v.div(lead)).collect();
+    let mut monic = [C64::ZERO; 4];
+    for k in 0..=n {
+        monic[k] = c[k].div(lead);
+    }
     if n == 2 {
         let half_b = monic[1].scale(0.5);
         let disc = half_b.mul(half_b).sub(monic[0]).sqrt();
-        return vec![C64::ZERO.sub(half_b).sub(disc), C64::ZERO.sub(half_b).add(disc)];
+        return (
+            [
+                C64::ZERO.sub(half_b).sub(disc),
+                C64::ZERO.sub(half_b).add(disc),
+                C64::ZERO,
+            ],
+            2,
+        );
     }
-    // Durand-Kerner from points near the unit circle (where the roots lie).
-    let mut r: Vec<C64> = (0..n)
-        .map(|k| {
-            let a = 0.4 + 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-            C64(0.9 * a.cos(), 0.9 * a.sin())
-        })
-        .collect();
-    for _ in 0..200 {
-        let mut moved = 0.0f64;
-        for i in 0..n {
-            let x = r[i];
-            let mut num = monic[n];
-            for k in (0..n).rev() {
-                num = num.mul(x).add(monic[k]);
-            }
-            let mut den = C64(1.0, 0.0);
-            for (j, &y) in r.iter().enumerate() {
-                if j != i {
-                    den = den.mul(x.sub(y));
-                }
-            }
-            let step = num.div(den);
-            moved = moved.max(step.norm());
-            r[i] = x.sub(step);
-        }
-        if moved < 1e-14 {
-            break;
-        }
+    let (a, b, cc) = (monic[2], monic[1], monic[0]);
+    let a3 = a.scale(1.0 / 3.0);
+    // x = t - a/3: t^3 + p t + q.
+    let p = b.sub(a.mul(a3));
+    let q = a3.mul(a3).mul(a3).scale(2.0).sub(a3.mul(b)).add(cc);
+    let half_q = q.scale(0.5);
+    let disc = half_q.mul(half_q).add(p.mul(p).mul(p).scale(1.0 / 27.0)).sqrt();
+    let mut u3 = C64::ZERO.sub(half_q).add(disc);
+    if u3.norm() < 1e-300 {
+        u3 = C64::ZERO.sub(half_q).sub(disc);
     }
-    r
-}
-
-/// The transmittance at warped depth `z` from normalized power moments `b = (b1, ..)` and
-/// `b_0`: the moments biased towards `bias_vector`, the system `B c = (1, z, z^2, ..)` of the
-/// Hankel matrix `B_ij = b_(i+j)` (`b_0 = 1` there), the roots of `sum c_k x^k`, the weights
-/// (`overestimation` at `z`, 1 at roots in front of `z`, 0 behind), the interpolating
-/// polynomial `p`, and `T = clamp(exp(-b_0 sum p_k b_k), 0, 1)`.
-pub fn power_transmittance(b0: f64, b: &[f64], bias_vector: &[f64], z: f64, bias: f64, overestimation: f64) -> f64 {
-    let mom = |k: usize, bb: &[f64]| if k == 0 { 1.0 } else { bb[k - 1] };
-    let bb: Vec<f64> = b
-        .iter()
-        .zip(bias_vector)
-        .map(|(&x, &v)| x * (1.0 - bias) + v * bias)
-        .collect();
-    let m = b.len() / 2 + 1;
-    let mut h = [[0.0f64; 4]; 4];
-    let mut y = [0.0f64; 4];
-    for i in 0..m {
-        for j in 0..m {
-            h[i][j] = mom(i + j, &bb);
-        }
-        y[i] = z.powi(i as i32);
-    }
-    let c = solve(h, y, m);
-    let roots = real_roots(&c[..m]);
-    let mut pts = vec![z];
-    let mut f = vec![overestimation];
-    for &r in &roots {
-        pts.push(r);
-        f.push(if r < z { 1.0 } else { 0.0 });
-    }
-    let p = interpolate(&pts, &f);
-    let absorbance: f64 = (0..m).map(|k| p[k] * mom(k, &bb)).sum();
-    let t = (-b0 * absorbance).exp();
-    if t.is_nan() { t } else { t.clamp(0.0, 1.0) }
-}
-
-/// The transmittance at warped depth `z` from normalized trigonometric moments
-/// `b = (re b1, im b1, re b2, ..)`: the moments scaled by `1 - bias`, the Hermitian Toeplitz
-/// system `M c = (1, u, u^2, ..)` (`M_ij = b_(i-j)`, `b_(-k) = conj(b_k)`, `u = e^(i phase)`),
-/// the roots of `sum conj(c_k) x^k`, the weights through `circleToParameter` and the wrapping
-/// zone, the interpolating polynomial `p`, and `T = exp(-b_0 Re(sum b_k p_k))` (the shader does
-/// not clamp it).
-pub fn trig_transmittance(b0: f64, b: &[f64], z: f64, bias: f64, overestimation: f64) -> f64 {
-    let wz = wrapping_zone();
-    let n = b.len() / 2;
-    let s = 1.0 - bias;
-    let mom = |k: usize| {
-        if k == 0 {
-            C64(1.0, 0.0)
+    let u = cbrt_c(u3);
+    let w = C64(-0.5, 0.75f64.sqrt());
+    let mut roots = [C64::ZERO; 3];
+    let mut uk = u;
+    for r in &mut roots {
+        let t = if uk.norm() < 1e-300 {
+            C64::ZERO
         } else {
-            C64(b[2 * k - 2] * s, b[2 * k - 1] * s)
+            uk.sub(p.div(uk.scale(3.0)))
+        };
+        let mut x = t.sub(a3);
+        for _ in 0..2 {
+            let f = x.mul(x).mul(x).add(a.mul(x).mul(x)).add(b.mul(x)).add(cc);
+            let d = x.mul(x).scale(3.0).add(a.mul(x).scale(2.0)).add(b);
+            if d.norm() > 1e-300 {
+                x = x.sub(f.div(d));
+            }
         }
-    };
-    let phase = z * wz[1] + wz[1];
-    let u = C64(phase.cos(), phase.sin());
-    let mut mt = [[C64::ZERO; 4]; 4];
-    let mut y = [C64::ZERO; 4];
-    let mut up = C64(1.0, 0.0);
-    for i in 0..=n {
-        for j in 0..=n {
-            mt[i][j] = if i >= j { mom(i - j) } else { mom(j - i).conj() };
+        *r = x;
+        uk = uk.mul(w);
+    }
+    (roots, 3)
+}
+
+/// The second pass of one pixel: its biased moments and the factored system, evaluated per
+/// fragment depth ([`Resolver::at`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Resolver {
+    /// Power moments: `b_0`, the biased moments `(1, b1, b2, ...)`, the Hankel system.
+    Power {
+        /// Total absorbance.
+        b0: f64,
+        /// `mom[k]` is the biased `b_k` (`mom[0] = 1`).
+        mom: [f64; 7],
+        /// The Hankel matrix `B_ij = b_(i+j)`, factored.
+        lu: Lu<f64>,
+        /// The overestimation weight.
+        overestimation: f64,
+    },
+    /// Trigonometric moments: `b_0`, the scaled moments, the Toeplitz system.
+    Trig {
+        /// Total absorbance.
+        b0: f64,
+        /// `mom[k]` is the scaled `b_k` (`mom[0] = 1`).
+        mom: [C64; 4],
+        /// The Toeplitz matrix `M_ij = b_(i-j)`, `b_(-k) = conj(b_k)`, factored.
+        lu: Lu<C64>,
+        /// The overestimation weight.
+        overestimation: f64,
+        /// The wrapping zone parameters.
+        wz: [f64; 4],
+    },
+}
+
+impl Resolver {
+    /// From normalized power moments `b = (b1, ..)` and `b_0`: the moments biased towards
+    /// `bias_vector` by `bias`, the Hankel matrix factored.
+    pub fn power(b0: f64, b: &[f64], bias_vector: &[f64], bias: f64, overestimation: f64) -> Resolver {
+        let mut mom = [0.0f64; 7];
+        mom[0] = 1.0;
+        for (k, (&x, &v)) in b.iter().zip(bias_vector).enumerate() {
+            mom[k + 1] = x * (1.0 - bias) + v * bias;
         }
-        y[i] = up;
-        up = up.mul(u);
+        let m = b.len() / 2 + 1;
+        let mut h = [[0.0f64; 4]; 4];
+        for (i, row) in h.iter_mut().enumerate().take(m) {
+            row[..m].copy_from_slice(&mom[i..i + m]);
+        }
+        Resolver::Power {
+            b0,
+            mom,
+            lu: Lu::new(h, m),
+            overestimation,
+        }
     }
-    let c = solve(mt, y, n + 1);
-    let coeffs: Vec<C64> = c[..=n].iter().map(|v| v.conj()).collect();
-    let roots = complex_roots(&coeffs);
-    let depth_parameter = circle_parameter(u.0, u.1);
-    let mut pts = vec![u];
-    let mut f = vec![overestimation];
-    for &r in &roots {
-        let rp = circle_parameter(r.0, r.1);
-        let binary = if rp < depth_parameter { 1.0 } else { 0.0 };
-        let linear = (rp * wz[2] + wz[3]).clamp(0.0, 1.0);
-        pts.push(r);
-        f.push(binary + linear);
+
+    /// From normalized trigonometric moments `b = (re b1, im b1, ..)` and `b_0`: the moments
+    /// scaled by `1 - bias`, the Toeplitz matrix factored.
+    pub fn trig(b0: f64, b: &[f64], bias: f64, overestimation: f64) -> Resolver {
+        let n = b.len() / 2;
+        let s = 1.0 - bias;
+        let mut mom = [C64::ZERO; 4];
+        mom[0] = C64(1.0, 0.0);
+        for k in 1..=n {
+            mom[k] = C64(b[2 * k - 2] * s, b[2 * k - 1] * s);
+        }
+        let mut mt = [[C64::ZERO; 4]; 4];
+        for i in 0..=n {
+            for j in 0..=n {
+                mt[i][j] = if i >= j { mom[i - j] } else { mom[j - i].conj() };
+            }
+        }
+        Resolver::Trig {
+            b0,
+            mom,
+            lu: Lu::new(mt, n + 1),
+            overestimation,
+            wz: wrapping_zone(),
+        }
     }
-    let p = interpolate(&pts, &f);
-    let absorbance: f64 = (0..=n).map(|k| mom(k).mul(p[k]).0).sum();
-    (-b0 * absorbance).exp()
+
+    /// The transmittance at warped depth `z`.
+    ///
+    /// Power: `B c = (1, z, z^2, ..)`, the roots of `sum c_k x^k`, the weights
+    /// (`overestimation` at `z`, 1 at roots in front of `z`, 0 behind), the interpolating
+    /// polynomial `p`, `T = clamp(exp(-b_0 sum p_k b_k), 0, 1)`.
+    ///
+    /// Trigonometric: `M c = (1, u, u^2, ..)` with `u = e^(i phase)`, the roots of
+    /// `sum conj(c_k) x^k`, the weights through `circleToParameter` and the wrapping zone, the
+    /// interpolating polynomial `p`, `T = exp(-b_0 Re(sum b_k p_k))` (not clamped, as the shader).
+    pub fn at(&self, z: f64) -> f64 {
+        match *self {
+            Resolver::Power {
+                b0,
+                mom,
+                lu,
+                overestimation,
+            } => {
+                let m = lu.n;
+                let mut y = [0.0f64; 4];
+                let mut zp = 1.0;
+                for yi in y.iter_mut().take(m) {
+                    *yi = zp;
+                    zp *= z;
+                }
+                let c = lu.solve(y);
+                let (roots, nr) = real_roots(&c[..m]);
+                let mut pts = [z; 4];
+                let mut f = [overestimation; 4];
+                for k in 0..nr {
+                    pts[k + 1] = roots[k];
+                    f[k + 1] = if roots[k] < z { 1.0 } else { 0.0 };
+                }
+                let p = interpolate(&pts[..=nr], &f[..=nr]);
+                let absorbance: f64 = (0..m).map(|k| p[k] * mom[k]).sum();
+                let t = (-b0 * absorbance).exp();
+                if t.is_nan() { t } else { t.clamp(0.0, 1.0) }
+            }
+            Resolver::Trig {
+                b0,
+                mom,
+                lu,
+                overestimation,
+                wz,
+            } => {
+                let n = lu.n - 1;
+                let phase = z * wz[1] + wz[1];
+                let u = C64(phase.cos(), phase.sin());
+                let mut y = [C64::ZERO; 4];
+                let mut up = C64(1.0, 0.0);
+                for yi in y.iter_mut().take(n + 1) {
+                    *yi = up;
+                    up = up.mul(u);
+                }
+                let c = lu.solve(y);
+                let mut coeffs = [C64::ZERO; 4];
+                for k in 0..=n {
+                    coeffs[k] = c[k].conj();
+                }
+                let (roots, nr) = complex_roots(&coeffs[..=n]);
+                let depth_parameter = circle_parameter(u.0, u.1);
+                let mut pts = [u; 4];
+                let mut f = [overestimation; 4];
+                for k in 0..nr {
+                    let rp = circle_parameter(roots[k].0, roots[k].1);
+                    let binary = if rp < depth_parameter { 1.0 } else { 0.0 };
+                    pts[k + 1] = roots[k];
+                    f[k + 1] = binary + (rp * wz[2] + wz[3]).clamp(0.0, 1.0);
+                }
+                let p = interpolate(&pts[..=nr], &f[..=nr]);
+                let absorbance: f64 = (0..=n).map(|k| mom[k].mul(p[k]).0).sum();
+                (-b0 * absorbance).exp()
+            }
+        }
+    }
 }
 
 /// The depth warp: `2 (ln z - ln near) / (ln far - ln near) - 1` (linear `2 z - 1` when
@@ -730,10 +836,11 @@ pub(super) fn mboit(binned: &BinnedStream, m: Moments) -> Image {
         if st.b0 < B0_MIN {
             return (bg, 1.0);
         }
+        let resolver = st.resolver(m);
         let mut acc = [0.0f32; 4];
         for &i in binned.bins.of(p) {
             let f = &frags[i as usize];
-            let t = st.transmittance_at(m, warp(f.depth, nf));
+            let t = transmittance(&resolver, warp(f.depth, nf));
             for k in 0..3 {
                 acc[k] = f16r(acc[k] + f.color[k] * t);
             }
