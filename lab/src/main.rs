@@ -61,7 +61,9 @@ USAGE:
 
 OPTIONS:
     --fragments FILE  the dump (format: lab/src/dump.rs, docs/quality.md)
-    --psnr DB         report the smallest MLAB M and HT K reaching this PSNR (default 40)
+    --psnr DB         report the smallest MLAB M and HT K reaching this PSNR (default 40), the
+                      smallest bounded-memory method of any kind reaching it, and the best
+                      bounded-memory method within 8, 16, 32 and 64 B/px
     --flip X          ... and a mean FLIP at or below X (default: PSNR only)
     --out DIR         write the images there (default: none)
     --no-flip         skip the FLIP metric
