@@ -20,7 +20,7 @@
 //!   what the scene itself does.
 
 use crate::faint::spread;
-use crate::methods::{BinnedStream, Image, Method, Moments, Weight};
+use crate::methods::{Arith, BinnedStream, Image, Method, Moments, Weight};
 use crate::metrics::{CHANGE_LEVELS, srgb8};
 use crate::report::progress_bar;
 use crate::scenes::{Rng, Scene};
@@ -62,12 +62,12 @@ pub fn flicker_methods() -> Vec<Method> {
     v.extend([2, 4, 8].map(Method::Mlab));
     v.extend([1, 3].map(Method::Hybrid));
     v.extend(crate::methods::KCLOSEST_SIZES.map(Method::KClosest));
-    // Three of the eight MBOIT variants (the cost of the camera run is theirs): 4 power
-    // moments at 32 bit, the paper's 6 power moments at 16 bit (its "112 bits"), and
-    // 3 trigonometric moments at 32 bit (its "224 bits").
-    v.extend([Moments::ALL[1], Moments::ALL[2], Moments::ALL[7]].map(Method::Mboit));
+    v.extend(Moments::ALL.map(Method::Mboit));
     v.push(Method::Wboit(Weight::Eq7));
     v.push(Method::Adaptive(4));
+    // MLAB 4 with the paper's rounding (no dither): how much of MLAB's flicker is the
+    // default arithmetic's dithered merge.
+    v.push(Method::MlabWith(4, Arith::Paper));
     v
 }
 
