@@ -324,8 +324,8 @@ pub fn run_command(
 /// `oit-lab evaluate`: every method of [`Method::standard_list`] against the A-buffer on the
 /// fragment dump `file` (images written to `out` if given), then the smallest MLAB `M` and
 /// HT `K` reaching `psnr_target` dB (and a mean FLIP at or below `flip_target`) on the
-/// covered pixels, the smallest of every bounded-memory method ([`crate::peers::bounded_methods`])
-/// reaching it, and the best bounded-memory method within each budget of
+/// covered pixels, the smallest of every bounded-memory method ([`crate::peers::bounded_methods`],
+/// and MLAB and HT at every size of [`MLAB_SIZES`] and [`HT_SIZES`]) reaching it, and the best bounded-memory method within each budget of
 /// [`crate::peers::BUDGETS`].
 pub fn evaluate_command(
     file: &str,
@@ -409,10 +409,20 @@ pub fn evaluate_command(
             HT_SIZES[HT_SIZES.len() - 1] + 1
         ),
     }
-    // Every bounded-memory method (issue 25): the smallest reaching the goal, and the best
-    // within each budget.
+    // Every bounded-memory method (issue 25; MLAB and HT at every size the lab has): the
+    // smallest reaching the goal, and the best within each budget.
+    let mut candidates = crate::peers::bounded_methods();
+    for m in MLAB_SIZES
+        .map(Method::Mlab)
+        .into_iter()
+        .chain(HT_SIZES.map(Method::Hybrid))
+    {
+        if !candidates.contains(&m) {
+            candidates.push(m);
+        }
+    }
     let mut scored = Vec::new();
-    for m in crate::peers::bounded_methods() {
+    for m in candidates {
         let img = m.render(&binned)?;
         let q = score(&e.reference.image, &img, &e.covered, with_flip);
         let ok = q.covered.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f));
