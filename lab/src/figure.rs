@@ -113,7 +113,7 @@ pub fn scene_row(
 }
 
 /// Methods shown in the small figure (docs/figure.png).
-pub const SMALL: [&str; 8] = [
+pub const SMALL: [&str; 10] = [
     "OVER unsorted",
     "MLAB 2",
     "MLAB 4",
@@ -122,6 +122,8 @@ pub const SMALL: [&str; 8] = [
     "AT 4",
     "WBOIT eq.7",
     "Meshkin",
+    "K-closest 4",
+    "MBOIT 6 power 16-bit",
 ];
 
 /// The main job's two figures, built a scene at a time.

@@ -14,6 +14,8 @@
 //!   [`dump`]: the fragment dump format and `oit-lab dump`.
 //! - [`report`]: the whole evaluation of one stream, its tables, the main job (`oit-lab run`)
 //!   and `oit-lab evaluate`.
+//! - [`peers`]: `oit-lab peers` (issue 25), MLAB against the bounded-memory methods by memory
+//!   budget, with the flicker of each under a moving camera.
 //! - [`stability`]: `oit-lab stability`, every scene in several primitive orders and seeds:
 //!   spreads of the quality and the change between orders.
 //! - [`font`]: the 5x7 bitmap font of the figures' labels.
@@ -31,6 +33,7 @@ pub mod figure;
 pub mod font;
 pub mod methods;
 pub mod metrics;
+pub mod peers;
 pub mod picture;
 pub mod report;
 pub mod scenes;

@@ -6,7 +6,7 @@
 use oit_lab::methods::Arith;
 use oit_lab::scenes::Scene;
 use oit_lab::tiled::TileSize;
-use oit_lab::{bench, dump, faint, report, stability};
+use oit_lab::{bench, dump, faint, peers, report, stability};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -26,6 +26,9 @@ USAGE:
     oit-lab stability [OPTIONS]             issue 10: every scene in several primitive orders and
                                             seeds: quality spreads, change between orders,
                                             the smallest M and K per scene
+    oit-lab peers [OPTIONS]                 issue 25: MLAB against the bounded-memory methods (moment-
+                                            based OIT, K-closest, HT, WBOIT, ...) by memory budget over
+                                            seeds and orders, and their flicker under a moving camera
     oit-lab help | --help | -h              this text; `oit-lab COMMAND --help` for a command
 
 The main job writes OUT/figure.png (Figure 3 grid), OUT/figure-small.png, one PNG per image
@@ -58,7 +61,9 @@ USAGE:
 
 OPTIONS:
     --fragments FILE  the dump (format: lab/src/dump.rs, docs/quality.md)
-    --psnr DB         report the smallest MLAB M and HT K reaching this PSNR (default 40)
+    --psnr DB         report the smallest MLAB M and HT K reaching this PSNR (default 40), the
+                      smallest bounded-memory method of any kind reaching it, and the best
+                      bounded-memory method within 8, 16, 32 and 64 B/px
     --flip X          ... and a mean FLIP at or below X (default: PSNR only)
     --out DIR         write the images there (default: none)
     --no-flip         skip the FLIP metric
@@ -158,6 +163,27 @@ OPTIONS:
     -h, --help        this text
 ";
 
+const PEERS_HELP: &str = "\
+oit-lab peers: every scene in several seeds and primitive orders with the bounded-memory methods
+(OVER, MLAB 1-4 and 8, HT 0/1/3/7, K-closest 2/4/8, moment-based OIT: power 4/6 and trigonometric
+2/3 at 16 and 32 bits, WBOIT, Bavoil-Myers, Meshkin) and AT 4; per memory budget (8, 16, 32, 64
+B/px) the best method by median PSNR and by median FLIP on covered pixels, MLAB 4 against the best
+other method at <= 32 B/px, and the flicker each adds to the reference's along a seeded camera path
+(16 frames of a slow dolly with drift).
+
+USAGE:
+    oit-lab peers [OPTIONS]
+
+OPTIONS:
+    --size WxH        frame size (default 320x180)
+    --seeds A,B,...   scene seeds (default 1,2,3; the camera path uses the first)
+    --orders N        primitive orders per seed (default 2: the scene's own and a shuffle)
+    --scenes A,B,...  scenes (default all seven)
+    --no-flip         skip FLIP
+    --no-camera       skip the camera path
+    -h, --help        this text
+";
+
 const DUMP_HELP: &str = "\
 oit-lab dump: write a scene's fragment stream as a dump file
 
@@ -237,7 +263,7 @@ fn main() -> ExitCode {
     let mut rest: Vec<String> = std::env::args().skip(1).collect();
     let cmd = match rest.first().map(String::as_str) {
         Some("run") | Some("evaluate") | Some("dump") | Some("bench") | Some("faint") | Some("scenes")
-        | Some("stability") | Some("help") => rest.remove(0),
+        | Some("stability") | Some("peers") | Some("help") => rest.remove(0),
         _ => "run".to_string(),
     };
     let mut args = Args { rest };
@@ -276,6 +302,11 @@ fn main() -> ExitCode {
             Ok(())
         }
         "stability" => cmd_stability(args),
+        "peers" if args.flag(&["-h", "--help"]) => {
+            print!("{PEERS_HELP}");
+            Ok(())
+        }
+        "peers" => cmd_peers(args),
         "bench" => cmd_bench(args),
         "faint" => cmd_faint(args),
         "evaluate" => cmd_evaluate(args),
@@ -473,6 +504,24 @@ fn cmd_stability(mut a: Args) -> Result<(), Fail> {
         strip: pngs.then_some((strip, 4.min(orders))),
     };
     stability::command(&plan, &scenes, &out).map_err(runtime)
+}
+
+fn cmd_peers(mut a: Args) -> Result<(), Fail> {
+    let size = parse_size_or(&mut a, (320, 180))?;
+    let seeds = parse_seeds(&mut a, &[1, 2, 3])?;
+    let orders = first(parse_list::<usize>(&mut a, "--orders")?, 2).max(1);
+    let scenes = parse_scenes(&mut a, &Scene::ALL)?;
+    let with_flip = !a.flag(&["--no-flip"]);
+    let camera = !a.flag(&["--no-camera"]);
+    a.finish()?;
+    let plan = peers::PeersPlan {
+        size,
+        seeds,
+        orders,
+        with_flip,
+        camera,
+    };
+    peers::command(&plan, &scenes).map_err(runtime)
 }
 
 fn cmd_dump(mut a: Args) -> Result<(), Fail> {

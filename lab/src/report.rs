@@ -324,7 +324,9 @@ pub fn run_command(
 /// `oit-lab evaluate`: every method of [`Method::standard_list`] against the A-buffer on the
 /// fragment dump `file` (images written to `out` if given), then the smallest MLAB `M` and
 /// HT `K` reaching `psnr_target` dB (and a mean FLIP at or below `flip_target`) on the
-/// covered pixels.
+/// covered pixels, the smallest of every bounded-memory method ([`crate::peers::bounded_methods`],
+/// and MLAB and HT at every size of [`MLAB_SIZES`] and [`HT_SIZES`]) reaching it, and the best bounded-memory method within each budget of
+/// [`crate::peers::BUDGETS`].
 pub fn evaluate_command(
     file: &str,
     psnr_target: f64,
@@ -406,6 +408,49 @@ pub fn evaluate_command(
             HT_SIZES[HT_SIZES.len() - 1],
             HT_SIZES[HT_SIZES.len() - 1] + 1
         ),
+    }
+    // Every bounded-memory method (issue 25; MLAB and HT at every size the lab has): the
+    // smallest reaching the goal, and the best within each budget.
+    let mut candidates = crate::peers::bounded_methods();
+    for m in MLAB_SIZES
+        .map(Method::Mlab)
+        .into_iter()
+        .chain(HT_SIZES.map(Method::Hybrid))
+    {
+        if !candidates.contains(&m) {
+            candidates.push(m);
+        }
+    }
+    let mut scored = Vec::new();
+    for m in candidates {
+        let img = m.render(&binned)?;
+        let q = score(&e.reference.image, &img, &e.covered, with_flip);
+        let ok = q.covered.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f));
+        scored.push((m, m.storage().per_pixel, q.covered.psnr, q.flip_covered, ok));
+    }
+    scored.sort_by_key(|x| x.1);
+    let show = |(m, b, p, f, _): &(Method, usize, f64, Option<f64>, bool)| {
+        let f = f.map_or(String::new(), |f| format!(", FLIP {f:.4}"));
+        format!("{} ({b} B/px, covered PSNR {}{f})", m.name(), num(*p, 1))
+    };
+    match scored.iter().find(|x| x.4) {
+        Some(x) => println!("Smallest bounded-memory method reaching {goal}: {}", show(x)),
+        None => println!("No bounded-memory method reaches {goal}"),
+    }
+    println!("\nBest bounded-memory method per budget (covered pixels):\n");
+    println!("| budget B/px | best by PSNR | best by FLIP |\n|---:|---|---|");
+    for budget in crate::peers::BUDGETS {
+        let fit: Vec<_> = scored.iter().filter(|x| x.1 <= budget).collect();
+        let by_psnr = fit.iter().max_by(|a, b| a.2.total_cmp(&b.2));
+        let by_flip = fit
+            .iter()
+            .filter(|x| x.3.is_some())
+            .min_by(|a, b| a.3.unwrap_or(f64::NAN).total_cmp(&b.3.unwrap_or(f64::NAN)));
+        println!(
+            "| {budget} | {} | {} |",
+            by_psnr.map_or("-".into(), |x| show(x)),
+            by_flip.map_or("-".into(), |x| show(x))
+        );
     }
     Ok(())
 }

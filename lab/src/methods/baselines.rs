@@ -137,8 +137,9 @@ pub(super) fn under(binned: &BinnedStream) -> Image {
     })
 }
 
-/// Window-space depth of a perspective projection with the frame's near and far planes.
-fn window_depth(z: f32, (near, far): (f32, f32)) -> f32 {
+/// Window-space depth of a perspective projection with the frame's near and far planes
+/// (WBOIT eq. 10 and K-closest layered OIT use it).
+pub fn window_depth(z: f32, (near, far): (f32, f32)) -> f32 {
     if near > 0.0 {
         (far * (z - near) / (z * (far - near))).clamp(0.0, 1.0)
     } else {

@@ -15,19 +15,24 @@
 //! through the kernel's pixel-major framebuffers, and the lab's [`Arith`]; [`lanes`] the same
 //! kernels through the kernel's span batcher and span framebuffers; [`baselines`] OVER, UNDER,
 //! WBOIT, Bavoil-Myers and Meshkin with the render-target formulas they share with
-//! [`crate::tiled`]; [`adaptive`] Adaptive Transparency. Everything public is re-exported
-//! here (`oit_lab::methods::over_step`, ...).
+//! [`crate::tiled`]; [`adaptive`] Adaptive Transparency; [`moments`] moment-based OIT;
+//! [`kclosest`] K-closest layered OIT. Everything public is re-exported here
+//! (`oit_lab::methods::over_step`, ...).
 
 pub mod adaptive;
 pub mod baselines;
+pub mod kclosest;
 pub mod kernel;
 pub mod lanes;
+pub mod moments;
 pub mod reference;
 
 pub use adaptive::{Visibility, at_first_removable};
 pub use baselines::{UNDER_THRESHOLD, Weight, f16r, over_step, r8_blend, wboit_resolve, wboit_step};
+pub use kclosest::{KCLOSEST_SIZES, Layers};
 pub use kernel::{Arith, hybrid_with, mlab_sorted_with, mlab_with, run_hybrid, run_mlab};
 pub use lanes::{hybrid_lanes_with, mlab_lanes_with};
+pub use moments::{MomentKind, MomentState, Moments};
 
 use crate::stream::{PixelBins, Stream};
 use adaptive::adaptive;
@@ -99,7 +104,7 @@ impl<'a> BinnedStream<'a> {
 }
 
 /// Bytes a method stores for a frame ([`Method::storage`]): so much per pixel and so much
-/// per fragment (only the A-buffer's grows with the fragments).
+/// per fragment (only the A-buffer's and AT's grow with the fragments).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Storage {
     /// Bytes per pixel.
@@ -155,6 +160,10 @@ pub enum Method {
     Meshkin,
     /// Adaptive Transparency with `N` visibility nodes, two passes.
     Adaptive(usize),
+    /// Moment-based OIT (Münstermann et al. 2018), two additive passes.
+    Mboit(Moments),
+    /// K-closest layered OIT (Diligent Engine Tutorial 29) with `K` layers and a tail.
+    KClosest(usize),
 }
 
 impl Method {
@@ -178,6 +187,11 @@ impl Method {
         v.extend(Weight::ALL.map(Method::Wboit));
         v.push(Method::BavoilMyers);
         v.push(Method::Meshkin);
+        // Issue 25's peers, one each (every variant is in `oit-lab peers`): K-closest with 4
+        // layers (20 B/px) and the paper's 6 power moments at 16 bit (112 bits + the RGBA16F
+        // target, 22 B/px).
+        v.push(Method::KClosest(4));
+        v.push(Method::Mboit(Moments::new(MomentKind::Power6, true)));
         v
     }
 
@@ -198,6 +212,8 @@ impl Method {
             Method::BavoilMyers => "Bavoil-Myers".into(),
             Method::Meshkin => "Meshkin".into(),
             Method::Adaptive(n) => format!("AT {n}"),
+            Method::Mboit(m) => m.name(),
+            Method::KClosest(k) => format!("K-closest {k}"),
         }
     }
 
@@ -212,16 +228,20 @@ impl Method {
     /// What the method stores for a frame: the one memory accounting of the lab, used by the
     /// quality tables ([`bytes_per_pixel`](Self::bytes_per_pixel)) and by the tiled frame
     /// renderer's storage table (`tiled::storage_bytes`). A row of MLAB or HT is 8 bytes;
-    /// `RGBA16F` 8, `R8` 1, `R32F` 4; an AT node 8 (f32 depth and visibility). The A-buffer
-    /// as the paper's Table 1 counts it: 12 bytes per stored fragment (RGBA8, f32 depth,
-    /// 32-bit next pointer) and a 4-byte head pointer per pixel.
+    /// `RGBA16F` 8, `R8` 1, `R32F` 4. The A-buffer as the paper's Table 1 counts it: 12 bytes
+    /// per stored fragment (RGBA8, f32 depth, 32-bit next pointer) and a 4-byte head pointer
+    /// per pixel. AT stores what the A-buffer stores: the AOIT code it follows keeps every
+    /// fragment in per-pixel lists and builds the visibility function in registers at the
+    /// resolve (as the MLAB paper's Table 1 and the AOIT slides count it). MBOIT: `b_0` and
+    /// the moments plus the RGBA16F target of its second pass ([`Moments::bytes_per_pixel`]);
+    /// K-closest: 4 bytes per layer and the 4-byte RGBA8 tail.
     pub fn storage(self) -> Storage {
         let per_pixel = |per_pixel| Storage {
             per_pixel,
             per_fragment: 0,
         };
         match self {
-            Method::Reference => Storage {
+            Method::Reference | Method::Adaptive(_) => Storage {
                 per_pixel: 4,
                 per_fragment: 12,
             },
@@ -230,7 +250,8 @@ impl Method {
             Method::Over | Method::Under | Method::Meshkin => per_pixel(8),
             Method::Wboit(_) => per_pixel(9),
             Method::BavoilMyers => per_pixel(12),
-            Method::Adaptive(n) => per_pixel(8 * n + 8),
+            Method::Mboit(m) => per_pixel(m.bytes_per_pixel()),
+            Method::KClosest(k) => per_pixel(4 * k + 4),
         }
     }
 
@@ -260,6 +281,12 @@ impl Method {
             Method::Meshkin => Ok(meshkin(binned)),
             Method::Adaptive(0) => Err("AT needs at least one node".into()),
             Method::Adaptive(n) => Ok(adaptive(binned, n)),
+            Method::Mboit(m) => Ok(moments::mboit(binned, m)),
+            Method::KClosest(k) if (1..=kclosest::KCLOSEST_MAX).contains(&k) => Ok(kclosest::kclosest(binned, k)),
+            Method::KClosest(k) => Err(format!(
+                "K-closest needs 1 to {} layers, not {k}",
+                kclosest::KCLOSEST_MAX
+            )),
         }
     }
 }
