@@ -18,6 +18,7 @@ use super::grid::{Grid, Spans};
 use super::pixel::{Ht, Mlab};
 use super::{Framebuffer, FramebufferError};
 use crate::arith::{Arithmetic, Unbiased};
+use crate::fragment::Fragment;
 use crate::lanes::{LANES, ResolvedLanes};
 use crate::resolve::{Background, Resolved};
 use crate::row::Row;
@@ -107,7 +108,9 @@ macro_rules! forward {
         }
     };
     (@one mut $name:ident ($($arg:ident: $ty:ty),*) ($($ret:ty)?)) => {
-        #[inline]
+        // Always: inlined into a caller's loop, the match on a variant that the loop does not
+        // change can be taken out of it (a call per insert cost 1.1-1.2x the typed grid).
+        #[inline(always)]
         fn $name(&mut self $(, $arg: $ty)*) $(-> $ret)? {
             each!(&mut self.0, f => f.$name($($arg),*))
         }
@@ -157,6 +160,7 @@ impl<'a, A: Arithmetic> Framebuffer for DynFramebuffer<'a, A> {
         ref fn height() -> u32;
         ref fn layers() -> Layers;
         mut fn clear();
+        mut fn insert(x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError>;
         mut fn insert_row(x: u32, y: u32, row: Row) -> Result<(), FramebufferError>;
         mut fn insert_span(x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError>;
         ref fn resolve(x: u32, y: u32) -> Result<Resolved, FramebufferError>;

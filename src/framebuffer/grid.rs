@@ -414,7 +414,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         L::clear::<P>(self.rows);
     }
 
-    #[inline]
+    #[inline(always)]
     fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
         self.dims.check(x, y)?;
         L::insert::<P>(self.rows, self.dims, x, y, row);

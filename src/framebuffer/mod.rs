@@ -301,7 +301,7 @@ pub trait Framebuffer {
         Self: Sized;
 
     /// Insert a fragment at `(x, y)`, quantized by [`Self::Arith`](Arithmetic::quantize).
-    #[inline]
+    #[inline(always)]
     fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
         self.insert_row(x, y, <Self::Arith as Arithmetic>::quantize(fragment))
     }
