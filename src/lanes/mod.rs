@@ -49,6 +49,7 @@
 //! ```
 
 mod quantize;
+mod x16;
 mod x8;
 
 use crate::arith::{Arithmetic, Unbiased};
@@ -56,7 +57,12 @@ use crate::resolve::{Background, Resolved};
 use crate::row::Row;
 use crate::tail::TailFormat;
 use glam::Vec4;
+// The inserts run on one 512-bit register per layer where the build has AVX-512 (`x16.rs`),
+// on the 8-wide lanes of `x8.rs` elsewhere.
+#[cfg(not(all(target_feature = "avx512f", target_feature = "avx512bw")))]
 use x8::{Mask8, Rows8};
+#[cfg(all(target_feature = "avx512f", target_feature = "avx512bw"))]
+use x16::{Mask8, Rows8};
 
 pub use quantize::{FragmentLanes, QuantizedLanes};
 pub use x8::BACKEND;
