@@ -58,11 +58,11 @@ use crate::row::Row;
 use crate::tail::TailFormat;
 use glam::Vec4;
 // The inserts run on one 512-bit register per layer where the build has AVX-512 (`x16.rs`),
-// on the 8-wide lanes of `x8.rs` elsewhere.
+// on the 8-wide lanes of `x8.rs` elsewhere (Listing 2 there on `HtRows8`: no masked stores).
 #[cfg(not(all(target_feature = "avx512f", target_feature = "avx512bw")))]
-use x8::{Mask8, Rows8};
+use x8::{HtMask8, HtRows8, Mask8, Rows8};
 #[cfg(all(target_feature = "avx512f", target_feature = "avx512bw"))]
-use x16::{Mask8, Rows8};
+use x16::{Mask8, Mask8 as HtMask8, Rows8, Rows8 as HtRows8};
 
 pub use quantize::{FragmentLanes, QuantizedLanes};
 pub use x8::BACKEND;
@@ -137,9 +137,9 @@ pub fn hybrid_insert_parts<T: TailFormat, const K: usize>(
     mask: u8,
 ) {
     if mask == 0xff {
-        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::ALL);
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, HtRows8::load(rows), HtMask8::ALL);
     } else {
-        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::from_bits(mask));
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, HtRows8::load(rows), HtMask8::from_bits(mask));
     }
 }
 

@@ -442,6 +442,110 @@ impl RowLanes for Rows8 {
     }
 }
 
+/// [`Rows8`] for Listing 2 (the HT span insert): the same lanes, but every select is a byte
+/// blend (`vpblendvb` with AVX2) on a mask widened to whole rows, never `vblendvpd`.
+///
+/// Listing 2 stores `select(swap, f, row)` back to the slot `row` was loaded from; with
+/// `vblendvpd`, LLVM 22 folds that store into `vmaskmovpd` (llvm/llvm-project#145176), which
+/// AMD CPUs microcode, seven per span insert at `K = 3`. With widened masks and byte blends
+/// the stores stay plain stores, for one more instruction per mask (`vmovshdup`).
+/// `docs/performance.md` measures both. Listing 1 keeps [`Rows8`]: its full-span inserts have
+/// no masked store to remove, and its instruction count would grow.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HtRows8(Rows8);
+
+/// Per-lane mask for [`HtRows8`]: all ones or all zeros over each whole 64-bit lane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HtMask8(Mask8);
+
+impl core::ops::BitAnd for HtMask8 {
+    type Output = HtMask8;
+    #[inline(always)]
+    fn bitand(self, rhs: HtMask8) -> HtMask8 {
+        HtMask8(self.0 & rhs.0)
+    }
+}
+
+#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
+impl HtMask8 {
+    /// Every lane on.
+    pub(super) const ALL: HtMask8 = HtMask8(Mask8::ALL);
+
+    /// From a bitmask (bit `i` = lane `i`): already whole-lane.
+    #[inline(always)]
+    pub(super) fn from_bits(bits: u8) -> HtMask8 {
+        HtMask8(Mask8::from_bits(bits))
+    }
+}
+
+#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
+impl HtRows8 {
+    #[inline(always)]
+    pub(super) fn load(rows: &[Row; 8]) -> HtRows8 {
+        HtRows8(Rows8::load(rows))
+    }
+}
+
+impl Slot<HtRows8> for [Row; LANES] {
+    #[inline(always)]
+    fn load(&self) -> HtRows8 {
+        HtRows8(Rows8::load(self))
+    }
+    #[inline(always)]
+    fn store(&mut self, value: HtRows8) {
+        *self = value.0.store();
+    }
+}
+
+impl<T: TailFormat> Slot<HtRows8> for [T; LANES] {
+    #[inline(always)]
+    fn load(&self) -> HtRows8 {
+        HtRows8(Rows8::load_tails(self))
+    }
+    #[inline(always)]
+    fn store(&mut self, value: HtRows8) {
+        *self = value.0.store_tails();
+    }
+}
+
+impl RowLanes for HtRows8 {
+    type Mask = HtMask8;
+    type Tail<T: TailFormat> = HtRows8;
+    #[inline(always)]
+    fn depth_le(self, other: Self) -> HtMask8 {
+        let le = |x: u32x8, y: u32x8| {
+            widen_hi(cast::<f32x8, u32x8>(
+                cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y)),
+            ))
+        };
+        let (x, y) = (self.0, other.0);
+        HtMask8(Mask8 {
+            a: le(x.a, y.a),
+            b: le(x.b, y.b),
+        })
+    }
+    #[inline(always)]
+    fn select(mask: HtMask8, x: Self, y: Self) -> Self {
+        let (m, x, y) = (mask.0, x.0, y.0);
+        HtRows8(Rows8 {
+            a: m.a.select(x.a, y.a),
+            b: m.b.select(x.b, y.b),
+        })
+    }
+    #[inline(always)]
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
+        HtRows8(Rows8::merge::<A>(front.0, back.0))
+    }
+    #[inline(always)]
+    fn tail_add<T: TailFormat>(tail: HtRows8, row: Self) -> HtRows8 {
+        HtRows8(Rows8::tail_add::<T>(tail.0, row.0))
+    }
+    #[inline(always)]
+    fn select_tail<T: TailFormat>(mask: HtMask8, x: HtRows8, y: HtRows8) -> HtRows8 {
+        Self::select(mask, x, y)
+    }
+}
+
 /// [`FragmentLanes::quantize_with`] and [`FragmentLanes::quantize_straight_with`].
 #[inline(always)]
 pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: bool, check: bool) -> QuantizedLanes {
