@@ -57,12 +57,13 @@ use crate::resolve::{Background, Resolved};
 use crate::row::Row;
 use crate::tail::TailFormat;
 use glam::Vec4;
-// The inserts run on one 512-bit register per layer where the build has AVX-512 (`x16.rs`),
-// on the 8-wide lanes of `x8.rs` elsewhere (Listing 2 there on `HtRows8`: no masked stores).
+// Listing 1 runs on the 8-wide lanes of `x8.rs`. Listing 2 runs on one 512-bit register per
+// layer where the build has AVX-512 (`x16.rs`), else on x8's `HtRows8` (no masked stores).
 #[cfg(not(all(target_feature = "avx512f", target_feature = "avx512bw")))]
-use x8::{HtMask8, HtRows8, Mask8, Rows8};
+use x8::{HtMask8, HtRows8};
+use x8::{Mask8, Rows8};
 #[cfg(all(target_feature = "avx512f", target_feature = "avx512bw"))]
-use x16::{Mask8, Mask8 as HtMask8, Rows8, Rows8 as HtRows8};
+use x16::{Mask8 as HtMask8, Rows8 as HtRows8};
 
 pub use quantize::{FragmentLanes, QuantizedLanes};
 pub use x8::BACKEND;

@@ -2,12 +2,15 @@
 //! span (8 rows of 8 bytes) is one `u32x16`, each 64-bit lane one whole row. The SWAR
 //! arithmetic is the one of `src/lanes/x8.rs` (`swar!`), instantiated for 512-bit types.
 //!
-//! The span API uses these lanes when the build has `avx512f` and `avx512bw` (`x86-64-v4`),
-//! where `wide` keeps every type here in one `zmm` register: one compare, one blend and one
-//! load or store per layer instead of two of each. Elsewhere `wide` splits the same types
-//! into 256-bit (AVX2) or 128-bit (SSE2, NEON, simd128) parts or plain arrays, so that this
-//! source is tested on every backend (`tests` below, against the 8-wide lanes of `x8.rs`),
-//! while the span API keeps the 8-wide lanes there.
+//! The HT span inserts (Listing 2) use these lanes when the build has `avx512f` and
+//! `avx512bw` (`x86-64-v4`), where `wide` keeps every type here in one `zmm` register: one
+//! compare, one blend and one load or store per layer instead of two of each. Listing 1 (MLAB)
+//! keeps the 8-wide lanes there: these lanes run it too (and the tests below check them),
+//! but measured slower on a Zen 4, whose 512-bit operations take two passes of its 256-bit
+//! units (`docs/performance.md`). Elsewhere `wide` splits the same types into 256-bit (AVX2)
+//! or 128-bit (SSE2, NEON, simd128) parts or plain arrays, so that this source is tested on
+//! every backend (`tests` below, against the 8-wide lanes of `x8.rs`), while the span API
+//! keeps the 8-wide lanes there.
 #![cfg_attr(not(all(target_feature = "avx512f", target_feature = "avx512bw")), allow(dead_code))]
 
 use super::LANES;

@@ -193,9 +193,10 @@ fn mul257_high(y: u16x16) -> u16x16 {
 
 /// The SIMD instruction set `wide` compiled the lanes for, chosen at compile time:
 ///
-/// - `"avx512"`: a build with `avx512f` and `avx512bw` (`x86-64-v4`). The inserts keep the
-///   eight rows of a layer in one 512-bit register (`src/lanes/x16.rs`); the quantizer and
-///   the resolves run on 256-bit registers.
+/// - `"avx512"`: a build with `avx512f` and `avx512bw` (`x86-64-v4`). The HT span inserts
+///   keep the eight rows of a layer in one 512-bit register (`src/lanes/x16.rs`); the MLAB
+///   span inserts, the quantizer and the resolves run on the 256-bit registers of the 8-wide
+///   lanes (where 512-bit MLAB lanes measured slower: `docs/performance.md`).
 /// - `"avx2 (avx512f build)"`: `avx512f` without `avx512bw` (no `x86-64-v*` level): the
 ///   8-wide lanes on AVX2, as `wide` compiles them there.
 /// - `"avx2"`: one 256-bit register per 8-wide vector.
@@ -307,8 +308,6 @@ impl core::ops::BitAnd for Mask8 {
     }
 }
 
-// The span API uses the 512-bit mask of `x16.rs` on AVX-512 builds.
-#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
 impl Mask8 {
     /// Every lane on.
     pub(super) const ALL: Mask8 = Mask8 {
