@@ -89,7 +89,7 @@ run_v4() {
     echo "CPU has avx512f: running the x86-64-v4 build natively"
     # --target: the build scripts stay generic x86-64 (RUSTFLAGS then reach only the target).
     CARGO_TARGET_DIR=target-v4 RUSTFLAGS="-C target-cpu=x86-64-v4 $NO_BENCH" \
-      kernel_tests x86-64-v4 "avx2 (avx512f build)" "${PROPTEST_CASES:-1024}" \
+      kernel_tests x86-64-v4 avx512 "${PROPTEST_CASES:-1024}" \
       --target x86_64-unknown-linux-gnu
   else
     echo "SKIPPED x86-64-v4: this CPU has no avx512f in /proc/cpuinfo ($(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs)); no emulator for it installs here"

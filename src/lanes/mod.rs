@@ -53,6 +53,9 @@
 mod quantize;
 // The lane helpers narrow lanes whose range their comments state (bytes of 16-bit slots).
 #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
+mod x16;
+// The same.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
 mod x8;
 
 use crate::arith::{Arithmetic, Unbiased};
@@ -60,7 +63,13 @@ use crate::resolve::{Background, Resolved};
 use crate::row::Row;
 use crate::tail::TailFormat;
 use glam::Vec4;
+// Listing 1 runs on the 8-wide lanes of `x8.rs`. Listing 2 runs on one 512-bit register per
+// layer where the build has AVX-512 (`x16.rs`), else on x8's `HtRows8` (no masked stores).
+#[cfg(not(all(target_feature = "avx512f", target_feature = "avx512bw")))]
+use x8::{HtMask8, HtRows8};
 use x8::{Mask8, Rows8};
+#[cfg(all(target_feature = "avx512f", target_feature = "avx512bw"))]
+use x16::{Mask8 as HtMask8, Rows8 as HtRows8};
 
 pub use quantize::{FragmentLanes, QuantizedLanes};
 pub use x8::BACKEND;
@@ -127,9 +136,9 @@ pub(crate) fn hybrid_insert_parts<T: TailFormat, const K: usize>(
     mask: u8,
 ) {
     if mask == 0xff {
-        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::ALL);
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, HtRows8::load(rows), HtMask8::ALL);
     } else {
-        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, Rows8::load(rows), Mask8::from_bits(mask));
+        crate::hybrid::insert_lanes::<_, _, _, T, K>(head, tails, HtRows8::load(rows), HtMask8::from_bits(mask));
     }
 }
 

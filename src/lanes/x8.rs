@@ -4,7 +4,7 @@
 //! of the crate that uses `wide`.
 
 use super::{FragmentLanes, MlabSpan, QuantizedLanes};
-use crate::arith::{Arithmetic, Kind, MIX_K};
+use crate::arith::{Arithmetic, Kind};
 use crate::resolve::{Background, FloatLanes};
 use crate::row::Row;
 use crate::tail::{Layout, TailFormat};
@@ -14,20 +14,200 @@ use wide::{f32x8, f64x4, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
 
 use super::LANES;
 
+/// `[v; N]` pairs: `[a, b, a, b, ...]` (the low and high half of each wider lane).
+pub(super) const fn pairs<T: Copy, const N: usize>(a: T, b: T) -> [T; N] {
+    let mut out = [a; N];
+    let mut i = 1;
+    while i < N {
+        out[i] = b;
+        i += 2;
+    }
+    out
+}
+
+/// The SWAR arithmetic on whole rows, written once for any register width: the merges
+/// (Eq. 7-8) and the tail adds on the 16-bit slots of one register of 64-bit rows, and
+/// their masks and constants. The calling module provides what lowers differently by width:
+/// `mul257_high(y)`, `(y * 257) >> 16` in each 16-bit slot for `y <= 65280`; `lo_hi(lo, hi)`,
+/// the low dword of each 64-bit lane from `lo` and the high one from `hi`; and
+/// `skip_invisible(row, tail, new)`, `tail` where `row` is invisible (no color, T = 255),
+/// else `new`. `swar!(u32xN, u16x2N, u8x4N, i16x2N, u64xN/2)` defines them for
+/// that width in the module that calls it: 256 bits here (four rows per register), 512 bits
+/// in `src/lanes/x16.rs` (eight rows). Each row's 64-bit lane is computed alone.
+macro_rules! swar {
+    ($u32:ident, $u16:ident, $u8:ident, $i16:ident, $u64:ident) => {
+        /// Low dword of every 64-bit lane (a row's color and transmittance; a tail's color sums).
+        pub(super) const LO: $u32 = $u32::new($crate::lanes::x8::pairs(!0, 0));
+        /// High dword of every 64-bit lane (a row's depth; a tail's alpha sum and count).
+        pub(super) const HI: $u32 = $u32::new($crate::lanes::x8::pairs(0, !0));
+        pub(super) const BYTES02: $u32 = $u32::splat(0x00ff_00ff);
+
+        /// Copy the mask in the high dword of each 64-bit lane to the whole lane.
+        #[inline(always)]
+        pub(super) fn widen_hi(m: $u32) -> $u32 {
+            let h = m & HI;
+            h | ::bytemuck::cast::<$u64, $u32>(::bytemuck::cast::<$u32, $u64>(h) >> 32)
+        }
+
+        /// `round(x / 255)` in each 16-bit slot holding `x <= 65025`: `((x + 128) * 257) >> 16`,
+        /// one add and one high multiply (`pmulhuw`). Equal to [`crate::unorm::div255`] for every
+        /// such `x` (`div255_slots_is_exact` checks all of them).
+        #[inline(always)]
+        pub(super) fn div255_slots(x: $u16) -> $u16 {
+            mul257_high(x + $u16::splat(128))
+        }
+
+        /// `T_front` in both 16-bit slots of each row's low dword (the high dword is don't-care),
+        /// and the back row's bytes 0 and 2 (R, B) and 1 and 3 (G, T), one per 16-bit slot.
+        #[inline(always)]
+        pub(super) fn merge_operands(front: $u32, back: $u32) -> ($u16, $u16, $u16) {
+            let t = (front >> 24) & $u32::splat(0xff);
+            let t2: $u16 = ::bytemuck::cast(t | (t << 16));
+            let even: $u16 = ::bytemuck::cast(back & BYTES02);
+            let odd: $u16 = ::bytemuck::cast((back >> 8) & BYTES02);
+            (t2, even, odd)
+        }
+
+        /// `A_front + products` bytewise, saturating; the front's T byte is replaced by the
+        /// product's T; the depth is the front's.
+        #[inline(always)]
+        pub(super) fn merge_result(front: $u32, pe: $u16, po: $u16) -> $u32 {
+            let product = ::bytemuck::cast::<$u16, $u32>(pe) | (::bytemuck::cast::<$u16, $u32>(po) << 8);
+            let a_front = front & $u32::splat(0x00ff_ffff);
+            let sum: $u32 =
+                ::bytemuck::cast(::bytemuck::cast::<$u32, $u8>(a_front).saturating_add(::bytemuck::cast(product)));
+            lo_hi(sum, front)
+        }
+
+        /// The paper's merge (Eq. 7-8) for the rows of one register: SWAR over 16-bit slots.
+        #[inline(always)]
+        pub(super) fn merge4_paper(front: $u32, back: $u32) -> $u32 {
+            let (t2, even, odd) = merge_operands(front, back);
+            // Each product <= 255 * 255: no carry out of its slot.
+            merge_result(front, div255_slots(even * t2), div255_slots(odd * t2))
+        }
+
+        /// `MIX_K` in every slot: the multiplier of [`crate::arith::mix16`].
+        pub(super) const K: $u16 = $u16::splat($crate::arith::MIX_K as u16);
+        /// Turns `d` in both slots into `[255 - d, d + 1]` (G slot, T slot): `(d ^ 0xffff) + 256`
+        /// is `255 - d` modulo 2^16.
+        pub(super) const ODD_XOR: $u16 = $u16::new($crate::lanes::x8::pairs(0xffff, 0));
+        pub(super) const ODD_ADD: $u16 = $u16::new($crate::lanes::x8::pairs(256, 1));
+
+        /// The unbiased merge ([`Unbiased`](crate::Unbiased)) for the rows of one register, with their dither `d`
+        /// (one per row, as `merge_dither8` makes them): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
+        /// `d' = d` for T and `254 - d` for the colors.
+        #[inline(always)]
+        pub(super) fn merge4_unbiased(front: $u32, back: $u32, d: $u16) -> $u32 {
+            let (t2, even, odd) = merge_operands(front, back);
+            let inv = $u16::splat(255) - d; // (254 - d) + 1: R and B
+            let odd_d = (d ^ ODD_XOR) + ODD_ADD; // G: (254 - d) + 1, T: d + 1
+            // Products <= 65025, plus at most 255: no carry out of a slot.
+            let pe = mul257_high(even * t2 + inv);
+            let po = mul257_high(odd * t2 + odd_d);
+            merge_result(front, pe, po)
+        }
+
+        /// [`PaperTail`](crate::hybrid::PaperTail)`::add` for the tails of one register.
+        #[inline(always)]
+        pub(super) fn tail_add4_paper(tail: $u32, row: $u32) -> $u32 {
+            let field = $u32::splat(0x3ff);
+            let byte = $u32::splat(0xff);
+            let max: $i16 = $i16::splat(1023);
+            // Color sums: each field + its byte, capped at 1023 (values < 2^15: i16 min is exact).
+            let sat = |sum: $u32| -> $u32 { ::bytemuck::cast(::bytemuck::cast::<$u32, $i16>(sum).min(max)) };
+            let r = sat((tail & field) + (row & byte));
+            let g = sat(((tail >> 10) & field) + ((row >> 8) & byte));
+            let b = sat(((tail >> 20) & field) + ((row >> 16) & byte));
+            let word0 = r | (g << 10) | (b << 20) | (tail & $u32::splat(0xc000_0000));
+            // Alpha sum += 255 - T and count += 1: two saturating u16 adds in the high dword.
+            let inc = ($u32::splat(255) - (row >> 24)) | $u32::splat(1 << 16);
+            let inc = ::bytemuck::cast::<$u64, $u32>(::bytemuck::cast::<$u32, $u64>(inc & LO) << 32);
+            let word1: $u32 =
+                ::bytemuck::cast(::bytemuck::cast::<$u32, $u16>(tail).saturating_add(::bytemuck::cast(inc)));
+            let new = lo_hi(word0, word1);
+            // Invisible rows (no color, T = 255) are skipped.
+            skip_invisible(row, tail, new)
+        }
+
+        /// Low dword masks for the fields of the wide tail.
+        pub(super) const BYTE_LO: $u32 = $u32::new($crate::lanes::x8::pairs(0xff, 0));
+        pub(super) const SUM_LO: $u32 = $u32::new($crate::lanes::x8::pairs(0x1fff, 0));
+        pub(super) const ALPHA_LO: $u32 = $u32::new($crate::lanes::x8::pairs(0x3fff, 0));
+        pub(super) const ONE_LO: $u32 = $u32::new($crate::lanes::x8::pairs(1, 0));
+
+        /// [`Tail`](crate::Tail)`::add` for the tails of one register (each tail one `u64`:
+        /// colors at bits 0, 13, 26, alpha at 39, count at 53).
+        #[inline(always)]
+        pub(super) fn tail_add4_wide(tail: $u32, row: $u32) -> $u32 {
+            let shr = |v: $u32, n: u64| ::bytemuck::cast::<$u64, $u32>(::bytemuck::cast::<$u32, $u64>(v) >> n);
+            let shl = |v: $u32, n: u64| ::bytemuck::cast::<$u64, $u32>(::bytemuck::cast::<$u32, $u64>(v) << n);
+            // Sums below 2^15 in the low 16-bit slot, zero elsewhere: i16 min is exact.
+            let sat = |v: $u32, max: i16| -> $u32 {
+                ::bytemuck::cast(::bytemuck::cast::<$u32, $i16>(v).min($i16::splat(max)))
+            };
+            let r = row & BYTE_LO;
+            let g = (row >> 8) & BYTE_LO;
+            let b = (row >> 16) & BYTE_LO;
+            let a = ((row >> 24) ^ BYTE_LO) & BYTE_LO; // 255 - T
+            let sr = sat((tail & SUM_LO) + r, 8191);
+            let sg = sat(((tail >> 13) & SUM_LO) + g, 8191);
+            let sb = sat((shr(tail, 26) & SUM_LO) + b, 8191);
+            let sa = sat((shr(tail, 39) & ALPHA_LO) + a, 16383);
+            let sn = sat(shr(tail, 53) + ONE_LO, 2047);
+            let new = sr | (sg << 13) | shl(sb, 26) | shl(sa, 39) | shl(sn, 53);
+            // Invisible rows (no color, T = 255) are skipped.
+            skip_invisible(row, tail, new)
+        }
+    };
+}
+pub(super) use swar;
+
+swar!(u32x8, u16x16, u8x32, i16x16, u64x4);
+
+/// `(lo & LO) | (hi & HI)` (on AVX2 one `vpblendd`).
+#[inline(always)]
+fn lo_hi(lo: u32x8, hi: u32x8) -> u32x8 {
+    (lo & LO) | (hi & HI)
+}
+
+/// Copy the mask in the low dword of each 64-bit lane to the whole lane.
+#[inline(always)]
+fn widen_lo(m: u32x8) -> u32x8 {
+    let l = m & LO;
+    l | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(l) << 32)
+}
+
+/// `tail` in the lanes where `row` is invisible (no color, T = 255), else `new`.
+#[inline(always)]
+fn skip_invisible(row: u32x8, tail: u32x8, new: u32x8) -> u32x8 {
+    let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
+    invisible.select(tail, new)
+}
+
+/// `(y * 257) >> 16` in each 16-bit slot: one high multiply (`pmulhuw`).
+#[inline(always)]
+fn mul257_high(y: u16x16) -> u16x16 {
+    y.mul_keep_high(u16x16::splat(257))
+}
+
 /// The SIMD instruction set `wide` compiled the lanes for, chosen at compile time:
 ///
-/// - `"avx2 (avx512f build)"`: a build with `avx512f` (`x86-64-v4`). `wide` 1.7 keeps every
-///   256-bit type the lanes use in one `ymm` register and calls the AVX2 intrinsics of an
-///   `"avx2"` build: its only AVX-512 paths for these types are shuffles, per-lane variable
-///   shifts, widening multiplies and f64-to-integer conversions, none of which the lanes call.
-///   LLVM may still encode the code with EVEX and mask registers.
+/// - `"avx512"`: a build with `avx512f` and `avx512bw` (`x86-64-v4`). The HT span inserts
+///   keep the eight rows of a layer in one 512-bit register (`src/lanes/x16.rs`); the MLAB
+///   span inserts, the quantizer and the resolves run on the 256-bit registers of the 8-wide
+///   lanes (where 512-bit MLAB lanes measured slower: `docs/performance.md`).
+/// - `"avx2 (avx512f build)"`: `avx512f` without `avx512bw` (no `x86-64-v*` level): the
+///   8-wide lanes on AVX2, as `wide` compiles them there.
 /// - `"avx2"`: one 256-bit register per 8-wide vector.
 /// - `"sse2"`: x86 without AVX2, two 128-bit halves (`wide` uses SSSE3, SSE4.1 or AVX where
 ///   the build has them).
 /// - `"neon"`: two 128-bit NEON halves (aarch64).
 /// - `"simd128"`: two 128-bit halves (wasm32 with `simd128`).
 /// - `"portable"`: no SIMD, plain arrays (wasm32 without `simd128`, any other target).
-pub const BACKEND: &str = if cfg!(target_feature = "avx512f") {
+pub const BACKEND: &str = if cfg!(all(target_feature = "avx512f", target_feature = "avx512bw")) {
+    "avx512"
+} else if cfg!(target_feature = "avx512f") {
     "avx2 (avx512f build)"
 } else if cfg!(target_feature = "avx2") {
     "avx2"
@@ -101,12 +281,6 @@ impl FloatLanes for f32x8 {
     }
 }
 
-/// Low dword of every 64-bit lane (a row's color and transmittance; a tail's color sums).
-const LO: u32x8 = u32x8::new([!0, 0, !0, 0, !0, 0, !0, 0]);
-/// High dword of every 64-bit lane (a row's depth; a tail's alpha sum and count).
-const HI: u32x8 = u32x8::new([0, !0, 0, !0, 0, !0, 0, !0]);
-const BYTES02: u32x8 = u32x8::splat(0x00ff_00ff);
-
 /// Eight rows (or eight tails), one per lane: lanes 0-3 in `a`, 4-7 in `b`, each 64-bit
 /// lane one whole row (`word0` in the low dword, `word1` in the high dword).
 #[derive(Clone, Copy, Debug)]
@@ -154,66 +328,6 @@ impl Mask8 {
     }
 }
 
-/// Copy the mask in the high dword of each 64-bit lane to the whole lane.
-#[inline(always)]
-fn widen_hi(m: u32x8) -> u32x8 {
-    let h = m & HI;
-    h | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(h) >> 32)
-}
-
-/// Copy the mask in the low dword of each 64-bit lane to the whole lane.
-#[inline(always)]
-fn widen_lo(m: u32x8) -> u32x8 {
-    let l = m & LO;
-    l | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(l) << 32)
-}
-
-/// `round(x / 255)` in each 16-bit slot holding `x <= 65025`: `((x + 128) * 257) >> 16`,
-/// one add and one high multiply (`pmulhuw`). Equal to [`crate::unorm::div255`] for every
-/// such `x` (`div255_slots_is_exact` checks all of them).
-#[inline(always)]
-fn div255_slots(x: u16x16) -> u16x16 {
-    (x + u16x16::splat(128)).mul_keep_high(u16x16::splat(257))
-}
-
-/// `T_front` in both 16-bit slots of each row's low dword (the high dword is don't-care),
-/// and the back row's bytes 0 and 2 (R, B) and 1 and 3 (G, T), one per 16-bit slot.
-#[inline(always)]
-fn merge_operands(front: u32x8, back: u32x8) -> (u16x16, u16x16, u16x16) {
-    let t = (front >> 24) & u32x8::splat(0xff);
-    let t2: u16x16 = cast(t | (t << 16));
-    let even: u16x16 = cast(back & BYTES02);
-    let odd: u16x16 = cast((back >> 8) & BYTES02);
-    (t2, even, odd)
-}
-
-/// `A_front + products` bytewise, saturating; the front's T byte is replaced by the
-/// product's T; the depth is the front's.
-#[inline(always)]
-fn merge_result(front: u32x8, pe: u16x16, po: u16x16) -> u32x8 {
-    let product = cast::<u16x16, u32x8>(pe) | (cast::<u16x16, u32x8>(po) << 8);
-    let a_front = front & u32x8::splat(0x00ff_ffff);
-    let sum: u32x8 = cast(cast::<u32x8, u8x32>(a_front).saturating_add(cast(product)));
-    (sum & LO) | (front & HI)
-}
-
-/// The paper's merge (Eq. 7-8) for four rows in one register: SWAR over 16-bit slots.
-#[inline(always)]
-fn merge4_paper(front: u32x8, back: u32x8) -> u32x8 {
-    let (t2, even, odd) = merge_operands(front, back);
-    // Each product <= 255 * 255: no carry out of its slot.
-    merge_result(front, div255_slots(even * t2), div255_slots(odd * t2))
-}
-
-/// `[MIX_K; 16]`: the multiplier of [`crate::arith::mix16`].
-const K: u16x16 = u16x16::splat(MIX_K as u16);
-/// Turns `d` in both slots into `[255 - d, d + 1]` (G slot, T slot): `(d ^ 0xffff) + 256`
-/// is `255 - d` modulo 2^16.
-const ODD_XOR: u16x16 = u16x16::new([
-    0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0, 0xffff, 0,
-]);
-const ODD_ADD: u16x16 = u16x16::new([256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1, 256, 1]);
-
 /// [`crate::arith::merge_dither`] of eight row pairs at once: `d` of pixel `p` in both
 /// 16-bit slots of the low dword of its 64-bit lane, lanes 0-3 in the first register and
 /// 4-7 in the second (high dwords don't-care). The eight folds share one register for the
@@ -233,43 +347,6 @@ fn merge_dither8(front: Rows8, back: Rows8) -> (u16x16, u16x16) {
     let d = s.mul_keep_high(u16x16::splat(255)); // 0..=254
     let db = cast::<u64x4, u16x16>(cast::<u16x16, u64x4>(d) >> 32);
     (d, db)
-}
-
-/// The unbiased merge ([`Unbiased`]) for four rows in one register, with their dither `d`
-/// ([`merge_dither8`]): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
-/// `d' = d` for T and `254 - d` for the colors.
-#[inline(always)]
-fn merge4_unbiased(front: u32x8, back: u32x8, d: u16x16) -> u32x8 {
-    let (t2, even, odd) = merge_operands(front, back);
-    let inv = u16x16::splat(255) - d; // (254 - d) + 1: R and B
-    let odd_d = (d ^ ODD_XOR) + ODD_ADD; // G: (254 - d) + 1, T: d + 1
-    let m257 = u16x16::splat(257);
-    // Products <= 65025, plus at most 255: no carry out of a slot.
-    let pe = (even * t2 + inv).mul_keep_high(m257);
-    let po = (odd * t2 + odd_d).mul_keep_high(m257);
-    merge_result(front, pe, po)
-}
-
-/// [`PaperTail`](crate::hybrid::PaperTail)`::add` for four tails in one register.
-#[inline(always)]
-fn tail_add4_paper(tail: u32x8, row: u32x8) -> u32x8 {
-    let field = u32x8::splat(0x3ff);
-    let byte = u32x8::splat(0xff);
-    let max: i16x16 = i16x16::splat(1023);
-    // Color sums: each field + its byte, capped at 1023 (values < 2^15: i16 min is exact).
-    let sat = |sum: u32x8| -> u32x8 { cast(cast::<u32x8, i16x16>(sum).min(max)) };
-    let r = sat((tail & field) + (row & byte));
-    let g = sat(((tail >> 10) & field) + ((row >> 8) & byte));
-    let b = sat(((tail >> 20) & field) + ((row >> 16) & byte));
-    let word0 = r | (g << 10) | (b << 20) | (tail & u32x8::splat(0xc000_0000));
-    // Alpha sum += 255 - T and count += 1: two saturating u16 adds in the high dword.
-    let inc = (u32x8::splat(255) - (row >> 24)) | u32x8::splat(1 << 16);
-    let inc = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(inc & LO) << 32);
-    let word1: u32x8 = cast(cast::<u32x8, u16x16>(tail).saturating_add(cast(inc)));
-    let new = (word0 & LO) | (word1 & HI);
-    // Invisible rows (no color, T = 255) are skipped.
-    let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
-    invisible.select(tail, new)
 }
 
 impl Rows8 {
@@ -294,35 +371,6 @@ impl Rows8 {
     fn store_tails<T: TailFormat>(self) -> [T; 8] {
         cast([self.a, self.b])
     }
-}
-
-/// Low dword masks for the fields of the wide tail.
-const BYTE_LO: u32x8 = u32x8::new([0xff, 0, 0xff, 0, 0xff, 0, 0xff, 0]);
-const SUM_LO: u32x8 = u32x8::new([0x1fff, 0, 0x1fff, 0, 0x1fff, 0, 0x1fff, 0]);
-const ALPHA_LO: u32x8 = u32x8::new([0x3fff, 0, 0x3fff, 0, 0x3fff, 0, 0x3fff, 0]);
-const ONE_LO: u32x8 = u32x8::new([1, 0, 1, 0, 1, 0, 1, 0]);
-
-/// [`Tail`](crate::Tail)`::add` for four tails in one register (each tail one `u64`:
-/// colors at bits 0, 13, 26, alpha at 39, count at 53).
-#[inline(always)]
-fn tail_add4_wide(tail: u32x8, row: u32x8) -> u32x8 {
-    let shr = |v: u32x8, n: u64| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(v) >> n);
-    let shl = |v: u32x8, n: u64| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(v) << n);
-    // Sums below 2^15 in the low 16-bit slot, zero elsewhere: i16 min is exact.
-    let sat = |v: u32x8, max: i16| -> u32x8 { cast(cast::<u32x8, i16x16>(v).min(i16x16::splat(max))) };
-    let r = row & BYTE_LO;
-    let g = (row >> 8) & BYTE_LO;
-    let b = (row >> 16) & BYTE_LO;
-    let a = ((row >> 24) ^ BYTE_LO) & BYTE_LO; // 255 - T
-    let sr = sat((tail & SUM_LO) + r, 8191);
-    let sg = sat(((tail >> 13) & SUM_LO) + g, 8191);
-    let sb = sat((shr(tail, 26) & SUM_LO) + b, 8191);
-    let sa = sat((shr(tail, 39) & ALPHA_LO) + a, 16383);
-    let sn = sat(shr(tail, 53) + ONE_LO, 2047);
-    let new = sr | (sg << 13) | shl(sb, 26) | shl(sa, 39) | shl(sn, 53);
-    // Invisible rows (no color, T = 255) are skipped.
-    let invisible = widen_lo(row.simd_eq(u32x8::splat(0xff00_0000)));
-    invisible.select(tail, new)
 }
 
 /// With AVX, a select of whole rows is `vblendvpd`, which reads only the sign bit of each
@@ -389,6 +437,110 @@ impl RowLanes for Rows8 {
     }
     #[inline(always)]
     fn select_tail<T: TailFormat>(mask: Mask8, x: Rows8, y: Rows8) -> Rows8 {
+        Self::select(mask, x, y)
+    }
+}
+
+/// [`Rows8`] for Listing 2 (the HT span insert): the same lanes, but every select is a byte
+/// blend (`vpblendvb` with AVX2) on a mask widened to whole rows, never `vblendvpd`.
+///
+/// Listing 2 stores `select(swap, f, row)` back to the slot `row` was loaded from; with
+/// `vblendvpd`, LLVM 22 folds that store into `vmaskmovpd` (llvm/llvm-project#145176), which
+/// AMD CPUs microcode, seven per span insert at `K = 3`. With widened masks and byte blends
+/// the stores stay plain stores, for one more instruction per mask (`vmovshdup`).
+/// `docs/performance.md` measures both. Listing 1 keeps [`Rows8`]: its full-span inserts have
+/// no masked store to remove, and its instruction count would grow.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HtRows8(Rows8);
+
+/// Per-lane mask for [`HtRows8`]: all ones or all zeros over each whole 64-bit lane.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct HtMask8(Mask8);
+
+impl core::ops::BitAnd for HtMask8 {
+    type Output = HtMask8;
+    #[inline(always)]
+    fn bitand(self, rhs: HtMask8) -> HtMask8 {
+        HtMask8(self.0 & rhs.0)
+    }
+}
+
+#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
+impl HtMask8 {
+    /// Every lane on.
+    pub(super) const ALL: HtMask8 = HtMask8(Mask8::ALL);
+
+    /// From a bitmask (bit `i` = lane `i`): already whole-lane.
+    #[inline(always)]
+    pub(super) fn from_bits(bits: u8) -> HtMask8 {
+        HtMask8(Mask8::from_bits(bits))
+    }
+}
+
+#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
+impl HtRows8 {
+    #[inline(always)]
+    pub(super) fn load(rows: &[Row; 8]) -> HtRows8 {
+        HtRows8(Rows8::load(rows))
+    }
+}
+
+impl Slot<HtRows8> for [Row; LANES] {
+    #[inline(always)]
+    fn load(&self) -> HtRows8 {
+        HtRows8(Rows8::load(self))
+    }
+    #[inline(always)]
+    fn store(&mut self, value: HtRows8) {
+        *self = value.0.store();
+    }
+}
+
+impl<T: TailFormat> Slot<HtRows8> for [T; LANES] {
+    #[inline(always)]
+    fn load(&self) -> HtRows8 {
+        HtRows8(Rows8::load_tails(self))
+    }
+    #[inline(always)]
+    fn store(&mut self, value: HtRows8) {
+        *self = value.0.store_tails();
+    }
+}
+
+impl RowLanes for HtRows8 {
+    type Mask = HtMask8;
+    type Tail<T: TailFormat> = HtRows8;
+    #[inline(always)]
+    fn depth_le(self, other: Self) -> HtMask8 {
+        let le = |x: u32x8, y: u32x8| {
+            widen_hi(cast::<f32x8, u32x8>(
+                cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y)),
+            ))
+        };
+        let (x, y) = (self.0, other.0);
+        HtMask8(Mask8 {
+            a: le(x.a, y.a),
+            b: le(x.b, y.b),
+        })
+    }
+    #[inline(always)]
+    fn select(mask: HtMask8, x: Self, y: Self) -> Self {
+        let (m, x, y) = (mask.0, x.0, y.0);
+        HtRows8(Rows8 {
+            a: m.a.select(x.a, y.a),
+            b: m.b.select(x.b, y.b),
+        })
+    }
+    #[inline(always)]
+    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
+        HtRows8(Rows8::merge::<A>(front.0, back.0))
+    }
+    #[inline(always)]
+    fn tail_add<T: TailFormat>(tail: HtRows8, row: Self) -> HtRows8 {
+        HtRows8(Rows8::tail_add::<T>(tail.0, row.0))
+    }
+    #[inline(always)]
+    fn select_tail<T: TailFormat>(mask: HtMask8, x: HtRows8, y: HtRows8) -> HtRows8 {
         Self::select(mask, x, y)
     }
 }
