@@ -317,10 +317,7 @@ pub trait Framebuffer {
         fragments: &FragmentLanes,
         mask: u8,
     ) -> Result<InvalidLanes, FramebufferError> {
-        Dims::new(self.width(), self.height()).check_span(x, y, mask)?;
-        let q = fragments.quantize_with::<Self::Arith>(mask);
-        self.insert_span(x, y, &q.rows, q.valid)?;
-        Ok(InvalidLanes(q.invalid))
+        insert_fragments(self, x, y, fragments, mask, false)
     }
 
     /// [`insert_span_fragments`](Self::insert_span_fragments) with straight (not
@@ -334,10 +331,7 @@ pub trait Framebuffer {
         fragments: &FragmentLanes,
         mask: u8,
     ) -> Result<InvalidLanes, FramebufferError> {
-        Dims::new(self.width(), self.height()).check_span(x, y, mask)?;
-        let q = fragments.quantize_straight_with::<Self::Arith>(mask);
-        self.insert_span(x, y, &q.rows, q.valid)?;
-        Ok(InvalidLanes(q.invalid))
+        insert_fragments(self, x, y, fragments, mask, true)
     }
 
     /// Resolve the 8 pixels of a span straight to RGBA8 (the span framebuffers keep the
@@ -394,6 +388,27 @@ pub trait Framebuffer {
     fn as_words(&self) -> &[u32] {
         bytemuck::cast_slice(self.as_rows())
     }
+}
+
+/// Check the lanes' pixels, validate and quantize (straight or premultiplied color), insert
+/// the valid lanes: [`Framebuffer::insert_span_fragments`] and `insert_span_straight`.
+#[inline(always)]
+fn insert_fragments<F: Framebuffer + ?Sized>(
+    fb: &mut F,
+    x: u32,
+    y: u32,
+    fragments: &FragmentLanes,
+    mask: u8,
+    straight: bool,
+) -> Result<InvalidLanes, FramebufferError> {
+    Dims::new(fb.width(), fb.height()).check_span(x, y, mask)?;
+    let q = if straight {
+        fragments.quantize_straight_with::<F::Arith>(mask)
+    } else {
+        fragments.quantize_with::<F::Arith>(mask)
+    };
+    fb.insert_span(x, y, &q.rows, q.valid)?;
+    Ok(InvalidLanes(q.invalid))
 }
 
 /// The bands of a framebuffer ([`Framebuffer::bands_mut`]).
