@@ -57,7 +57,7 @@ fn mesh(w: u32, h: u32) -> Vec<Event> {
     let mut out = Vec::new();
     for t in raster::scene(w, h, 48, 24) {
         raster::rasterize(&t, w, h, |x, y, z| {
-            let f = Fragment::straight_rgb(t.color, t.alpha, z).expect("valid");
+            let f = Fragment::straight(Vec3::from_array(t.color), t.alpha, z).expect("valid");
             out.push((x, y, f));
         });
     }

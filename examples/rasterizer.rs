@@ -47,7 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         raster::rasterize(t, W, H, |x, y, z| covered.push((x, y, z)));
         for &(x, y, z) in &covered {
             // Straight linear color; the kernel premultiplies and quantizes it.
-            let f = Fragment::straight_rgb(t.color, t.alpha, z)?;
+            let f = Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z)?;
             batch.insert(x, y, &f)?;
             abuffer[(y * W + x) as usize].push(f);
             fragments += 1;

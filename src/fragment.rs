@@ -49,7 +49,7 @@ impl core::error::Error for FragmentError {}
 ///
 /// Colors are **linear** (not sRGB-encoded): convert sRGB texture or vertex colors to
 /// linear before building a fragment. Constructors take glam's [`Vec3`] (the
-/// `glam` re-exported as `mlab::glam`) or plain arrays (`*_rgb`, `*_rgba`), so a renderer on
+/// `glam` re-exported as `mlab::glam`) or plain `[R, G, B, A]` arrays (`*_rgba`), so a renderer on
 /// another glam version passes `v.to_array()`.
 ///
 /// Invariants (checked by every constructor): color channels finite and in `[0, 1]`
@@ -165,18 +165,8 @@ impl Fragment {
         })
     }
 
-    /// [`premultiplied`](Self::premultiplied) from a plain `[R, G, B]` array (no glam type
-    /// needed: any glam version's `Vec3::to_array()` gives one).
-    pub fn premultiplied_rgb(color: [f32; 3], alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
-        Fragment::premultiplied(Vec3::from_array(color), alpha, depth)
-    }
-
-    /// [`straight`](Self::straight) from a plain `[R, G, B]` array.
-    pub fn straight_rgb(color: [f32; 3], alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
-        Fragment::straight(Vec3::from_array(color), alpha, depth)
-    }
-
-    /// A fragment from premultiplied `[R, G, B, A]` (color already multiplied by alpha).
+    /// A fragment from premultiplied `[R, G, B, A]` (color already multiplied by alpha; no
+    /// glam type needed: any glam version's `to_array()` gives the array).
     pub fn premultiplied_rgba(rgba: [f32; 4], depth: f32) -> Result<Fragment, FragmentError> {
         let [r, g, b, a] = rgba;
         Fragment::premultiplied(Vec3::new(r, g, b), a, depth)

@@ -43,7 +43,7 @@
 //!
 //! **glam**: the glam types at the API (`Vec3`, `Vec4`) are this crate's glam, re-exported
 //! as [`mlab::glam`](glam); write `use mlab::glam::Vec3;`. A renderer on another glam
-//! version passes plain arrays ([`Fragment::straight_rgb`], [`Fragment::premultiplied_rgba`],
+//! version passes plain arrays ([`Fragment::straight_rgba`], [`Fragment::premultiplied_rgba`],
 //! [`FragmentLanes::from_rgba`]).
 //!
 //! ## A pixel
@@ -70,8 +70,8 @@
 //! let (w, h) = (320, 240);
 //! let mut storage = vec![Row::EMPTY; MlabFramebuffer::<4>::rows_needed(w, h)?];
 //! let mut fb = MlabFramebuffer::<4>::new_cleared(&mut storage, w, h)?;
-//! fb.insert(10, 20, &Fragment::straight_rgb([1.0, 0.0, 0.0], 0.5, 2.0)?)?;
-//! fb.insert(10, 20, &Fragment::straight_rgb([0.0, 0.0, 1.0], 0.5, 1.0)?)?;
+//! fb.insert(10, 20, &Fragment::straight_rgba([1.0, 0.0, 0.0, 0.5], 2.0)?)?;
+//! fb.insert(10, 20, &Fragment::straight_rgba([0.0, 0.0, 1.0, 0.5], 1.0)?)?;
 //! let mut out = vec![[0u8; 4]; (w * h) as usize];
 //! fb.resolve_rgba8(&mut out, Background::Transparent)?; // premultiplied, linear
 //! let alpha = out[20 * 320 + 10][3]; // 1 - 0.5 * 0.5, within one rounding of the merge

@@ -51,7 +51,7 @@ impl Layers {
     }
 
     /// Rows (8-byte slots) per pixel: `M`, or `K + 1`.
-    pub const fn rows_per_pixel(self) -> usize {
+    pub(crate) const fn rows_per_pixel(self) -> usize {
         match self {
             Layers::Mlab(m) => m,
             Layers::Hybrid(k) => k + 1,

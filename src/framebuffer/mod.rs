@@ -267,7 +267,8 @@ pub trait Framebuffer {
     /// Height in pixels (lines).
     fn height(&self) -> u32;
 
-    /// The method and size ([`Layers::rows_per_pixel`]: row-sized slots per pixel).
+    /// The method and size: `Layers::Mlab(M)` has `M` row-sized slots per pixel,
+    /// `Layers::Hybrid(K)` has `K + 1`.
     fn layers(&self) -> Layers;
 
     /// Reset every pixel to empty (empty rows, empty tails; padding lanes included).

@@ -17,8 +17,6 @@ use super::x8;
 /// let straight = FragmentLanes::from_rgba([[1.0, 0.5, 0.0, 0.5]; 8], [2.0; 8]);
 /// let q = straight.quantize_straight_with::<mlab::Unbiased>(0xff);
 /// assert_eq!(q.valid, 0xff);
-/// let pre = FragmentLanes::from_fn(|lane| ([0.5, 0.25, 0.0], 0.5, 2.0 + lane as f32));
-/// assert_eq!(pre.depth[7], 9.0);
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FragmentLanes {
@@ -52,20 +50,6 @@ impl FragmentLanes {
             alpha: core::array::from_fn(|lane| rgba[lane][3]),
             depth,
         }
-    }
-
-    /// Eight fragments from `(color [R, G, B], alpha, depth)` per lane.
-    pub fn from_fn(mut f: impl FnMut(usize) -> ([f32; 3], f32, f32)) -> FragmentLanes {
-        let mut out = FragmentLanes::TRANSPARENT;
-        for lane in 0..LANES {
-            let (c, a, z) = f(lane);
-            for (ch, v) in out.color.iter_mut().zip(c) {
-                ch[lane] = v;
-            }
-            out.alpha[lane] = a;
-            out.depth[lane] = z;
-        }
-        out
     }
 
     /// Eight fully transparent black fragments at depth 0 (valid; a placeholder for lanes
