@@ -1,39 +1,9 @@
 //! Every method against a hand-computed case of its own formula, on 1x1 frames.
 
-use oit_lab::methods::{Arith, BinnedStream, Image, Method, Visibility, Weight};
-use oit_lab::stream::{Frag, Stream};
+mod common;
 
-/// A 1x1 stream from `(depth, premultiplied color, alpha)` in submission order.
-fn pixel(frags: &[(f32, [f32; 3], f32)], bg: [f32; 3]) -> Stream {
-    let frags = frags
-        .iter()
-        .map(|&(depth, color, alpha)| Frag {
-            pixel: 0,
-            depth,
-            color,
-            alpha,
-        })
-        .collect();
-    Stream {
-        width: 1,
-        height: 1,
-        background: bg,
-        frags,
-    }
-}
-
-fn render(m: Method, s: &Stream) -> Image {
-    m.render(&BinnedStream::new(s)).expect("render")
-}
-
-fn close(got: [f32; 3], want: [f32; 3], tol: f32) {
-    for k in 0..3 {
-        assert!(
-            (got[k] - want[k]).abs() <= tol,
-            "channel {k}: got {got:?}, want {want:?} (tol {tol})"
-        );
-    }
-}
+use common::{close, pixel, render};
+use oit_lab::methods::{Arith, BinnedStream, Method, Visibility, Weight};
 
 const RED: [f32; 3] = [0.5, 0.0, 0.0];
 const GREEN: [f32; 3] = [0.0, 0.5, 0.0];

@@ -3,38 +3,10 @@
 
 use oit_lab::methods::kclosest::{EMPTY, OPACITY_THRESHOLD, layer_depth, pack};
 use oit_lab::methods::moments::{dequantize, features, offsets, quantize, warp};
-use oit_lab::methods::{BinnedStream, Image, Layers, Method, MomentState, Moments};
-use oit_lab::stream::{Frag, Stream};
+mod common;
 
-fn pixel(frags: &[(f32, [f32; 3], f32)], bg: [f32; 3]) -> Stream {
-    Stream {
-        width: 1,
-        height: 1,
-        background: bg,
-        frags: frags
-            .iter()
-            .map(|&(depth, color, alpha)| Frag {
-                pixel: 0,
-                depth,
-                color,
-                alpha,
-            })
-            .collect(),
-    }
-}
-
-fn render(m: Method, s: &Stream) -> Image {
-    m.render(&BinnedStream::new(s)).expect("render")
-}
-
-fn close(got: [f32; 3], want: [f32; 3], tol: f32) {
-    for k in 0..3 {
-        assert!(
-            (got[k] - want[k]).abs() <= tol,
-            "got {got:?}, want {want:?} (tol {tol})"
-        );
-    }
-}
+use common::{close, pixel, render};
+use oit_lab::methods::{BinnedStream, Layers, Method, MomentState, Moments};
 
 /// Every permutation of `0..n` (Heap's algorithm).
 fn permutations(n: usize) -> Vec<Vec<usize>> {

@@ -8,7 +8,7 @@ use core::fmt::Debug;
 use core::marker::PhantomData;
 
 use super::pixel::Pixel;
-use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
+use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, clear_rgba8, write_lines, write_spans};
 use crate::lanes::{LANES, LANES_U32, ResolvedLanes};
 use crate::resolve::{Background, Resolved, to_rgba16f};
 use crate::row::Row;
@@ -90,11 +90,6 @@ fn units<P: Pixel, T>(line: &[Row], out: &mut [[T; LANES]], f: impl Fn(&[Row]) -
     for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * P::ROWS)) {
         *o = f(u);
     }
-}
-
-/// The background's RGBA8 on 8 lanes (a span that does not exist).
-fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
-    [crate::to_rgba8(Resolved::CLEAR.pixel(bg)); LANES]
 }
 
 impl PixelMajor {

@@ -229,6 +229,11 @@ pub(crate) const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
     transmittance: [1.0; LANES],
 };
 
+/// The background's RGBA8 on 8 lanes (a span that does not exist).
+pub(crate) fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
+    [crate::to_rgba8(Resolved::CLEAR.pixel(bg)); LANES]
+}
+
 /// What every framebuffer offers, whatever its method (MLAB or HT), its arrangement
 /// (pixel-major or spans), its size (compile time or [run time](crate::DynFramebuffer)) and
 /// its arithmetic.

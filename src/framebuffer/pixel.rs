@@ -11,7 +11,7 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::{CLEAR_LANES, Layers};
+use super::{CLEAR_LANES, Layers, clear_rgba8};
 use crate::arith::{Arithmetic, Unbiased};
 use crate::hybrid::{self, TailFormat};
 use crate::lanes::{self, LANES, ResolvedLanes};
@@ -251,7 +251,7 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
         match layers::<M>(span) {
             Some(l) => lanes::mlab_resolve_rgba8(l, background),
-            None => CLEAR_LANES.rgba8(background),
+            None => clear_rgba8(background),
         }
     }
 }
@@ -410,7 +410,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
         match Self::parts(span) {
             Some((h, t)) => lanes::hybrid_resolve_parts_rgba8(h, t, background),
-            None => CLEAR_LANES.rgba8(background),
+            None => clear_rgba8(background),
         }
     }
 }
