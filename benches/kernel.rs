@@ -15,7 +15,10 @@
 //! is full and every insert merges (the steady state of a heavy scene).
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
-use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
+use mlab::lanes::{self, HybridSpan, LANES};
+
+/// An MLAB span, layer-major (`span[j][lane]`).
+type MlabSpan<const M: usize> = [[Row; LANES]; M];
 use mlab::{
     Arithmetic, Background, Paper, Row, TailFormat, Unbiased, hybrid, mlab as listing1, resolve_rows, to_rgba8,
 };
@@ -334,7 +337,7 @@ fn resolve(c: &mut Criterion) {
     g.bench_function(BenchmarkId::new("ht_scalar", 3), |b| {
         b.iter(|| {
             for (o, (h, t)) in out.iter_mut().zip(black_box(&hp)) {
-                *o = to_rgba8(hybrid::resolve(h, *t).pixel(bg));
+                *o = to_rgba8(mlab::Hybrid::<3>::from_parts(*h, *t).resolve().pixel(bg));
             }
         })
     });

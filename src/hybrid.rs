@@ -70,10 +70,9 @@ pub(crate) fn insert_lanes<L: RowLanes, S: Slot<L>, TS: Slot<L::Tail<T>>, T: Tai
     tail.store(L::select_tail(on, L::tail_add::<T>(t, f), t));
 }
 
-/// Resolve head and tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`, where
-/// the head is Eq. 5 over its rows and the tail is [`TailFormat::resolve`].
+/// [`Hybrid::resolve`] over a head slice and a tail.
 #[inline]
-pub fn resolve<T: TailFormat>(head: &[Row], tail: T) -> Resolved {
+pub(crate) fn resolve<T: TailFormat>(head: &[Row], tail: T) -> Resolved {
     let h = crate::resolve::resolve_layers(head.iter().map(crate::resolve::row_bytes));
     let ([r, g, b], t) = resolve_lanes::<f32>(h, tail.color_sum(), tail.alpha_sum(), tail.count());
     Resolved {
@@ -140,7 +139,8 @@ impl<const K: usize, A: Arithmetic> Hybrid<K, A> {
         insert(&mut self.head, &mut self.tail, row);
     }
 
-    /// Resolve head and tail ([`resolve`]).
+    /// Resolve head and tail: `C = C_head + T_head * C_tail`, `T = T_head * T_tail`, where
+    /// the head is Eq. 5 over its rows and the tail is [`TailFormat::resolve`].
     #[inline]
     pub fn resolve(&self) -> Resolved {
         resolve(&self.head, self.tail)

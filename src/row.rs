@@ -115,7 +115,7 @@ impl Row {
 
     /// Color and transmittance as bytes `[R, G, B, T]`.
     #[inline(always)]
-    pub const fn rgbt(self) -> [u8; 4] {
+    pub(crate) const fn rgbt(self) -> [u8; 4] {
         self.rgbt
     }
 

@@ -422,7 +422,10 @@ fn garbage_rows_read_back_from_bytes() {
     hybrid::insert(&mut head, &mut tail, front);
     assert_eq!(head[0].color(), [0, 0, 9]);
     assert_eq!((tail.color_sum(), tail.alpha_sum(), tail.count()), ([10, 0, 0], 55, 1));
-    assert_finite_in_range(hybrid::resolve(&head, tail), 1.0 + 1023.0 / 255.0);
+    assert_finite_in_range(
+        mlab::Hybrid::<1, Paper>::from_parts(head, tail).resolve(),
+        1.0 + 1023.0 / 255.0,
+    );
 }
 
 #[test]

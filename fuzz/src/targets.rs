@@ -13,7 +13,10 @@ use mlab::{
     to_rgba8, to_rgba16f,
 };
 
-use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
+use mlab::lanes::{self, HybridSpan, LANES};
+
+/// An MLAB span, layer-major (`span[j][lane]`).
+type MlabSpan<const M: usize> = [[Row; LANES]; M];
 
 use mlab_reference::lanes::{check_fragment_lanes, check_hybrid_span, check_mlab_span};
 use mlab_reference::model::{Model, RefMlab, composite_rows_f64, ref_bubble, ref_hybrid, ref_tail_fields, tail_f64};
@@ -318,7 +321,7 @@ pub fn check_layout(b: [u8; 8]) {
     assert_eq!(Row::from_words(w), row);
     assert_eq!(row.color(), [b[0], b[1], b[2]]);
     assert_eq!(row.transmittance(), b[3]);
-    assert_eq!(row.rgbt(), [b[0], b[1], b[2], b[3]]);
+    assert_eq!((row.color(), row.transmittance()), ([b[0], b[1], b[2]], b[3]));
     assert_eq!(row.depth().to_bits(), w[1]);
     assert_eq!(row.is_empty(), b == [0, 0, 0, 255, 0, 0, 0x80, 0x7f]);
     assert_eq!(row.is_invisible(), b[..4] == [0, 0, 0, 255]);
@@ -400,9 +403,9 @@ fn check_merge<A: Model>(front: Row, back: Row) {
     let name = A::NAME;
     let m = <A as mlab::Arithmetic>::merge(front, back);
     assert_eq!(m, A::ref_merge(front, back), "{name} merge of {front:?}, {back:?}");
-    let [fr, fg, fb, ft] = front.rgbt().map(f64::from);
-    let [br, bg, bb, bt] = back.rgbt().map(f64::from);
-    let [mr, mg, mb, mt] = m.rgbt().map(f64::from);
+    let [fr, fg, fb, ft, ..] = front.to_bytes().map(f64::from);
+    let [br, bg, bb, bt, ..] = back.to_bytes().map(f64::from);
+    let [mr, mg, mb, mt, ..] = m.to_bytes().map(f64::from);
     let within = |got: f64, exact: f64| (got - exact).abs() < A::MERGE_ERROR + 1e-9;
     assert!(
         within(mt, ft * bt / 255.0),
@@ -586,7 +589,7 @@ fn garbage_hybrid<const K: usize, A: Model>(input: &mut Input) {
         );
     }
 
-    let r = hybrid::resolve(&head, tail);
+    let r = Hybrid::<K, A>::from_parts(head, tail).resolve();
     check_resolved(r, K as f32 + limit, &context);
     check_pixels(r, input, &context);
 
@@ -614,7 +617,7 @@ fn garbage_hybrid<const K: usize, A: Model>(input: &mut Input) {
     if invariants_hold(&head) && new_ok {
         check_invariants(&h, &context);
     }
-    check_resolved(hybrid::resolve(&h, t), K as f32 + limit, &context);
+    check_resolved(px.resolve(), K as f32 + limit, &context);
 
     // Lanes on garbage: lane l holds the head rotated by l and the tail bytes rotated by l.
     let mask = input.u8().unwrap_or(0xff);
@@ -830,7 +833,11 @@ impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
         slots[K] = Row::from_bytes(t);
     }
     fn ref_resolve(slots: &[Row]) -> Resolved {
-        hybrid::resolve(&slots[..K], <A::Tail as TailFormat>::from_bytes(slots[K].to_bytes()))
+        Hybrid::<K, A>::from_parts(
+            core::array::from_fn(|i| slots[i]),
+            <A::Tail as TailFormat>::from_bytes(slots[K].to_bytes()),
+        )
+        .resolve()
     }
     fn cleared(slots: &mut [Row]) {
         slots[..K].fill(Row::EMPTY);

@@ -70,7 +70,7 @@ pub fn tail_sums(binned: &BinnedStream, k: usize, arith: Arith) -> Result<Vec<Ta
             if row.is_invisible() {
                 continue;
             }
-            let [r, g, b, t] = row.rgbt();
+            let ([r, g, b], t) = (row.color(), row.transmittance());
             sums.color[0] += r as u64;
             sums.color[1] += g as u64;
             sums.color[2] += b as u64;

@@ -56,7 +56,7 @@ fn abuffer_sequential(s: &Stream) -> Vec<[u8; 4]> {
             l.sort_by(|a, b| a.1.depth().total_cmp(&b.1.depth()).then(b.0.cmp(&a.0)));
             let (mut c, mut t) = (Vec3::ZERO, 1.0f32);
             for (_, r) in l.iter() {
-                let [cr, cg, cb, tr] = r.rgbt();
+                let ([cr, cg, cb], tr) = (r.color(), r.transmittance());
                 c += t * Vec3::new(cr as f32, cg as f32, cb as f32) * (1.0 / 255.0);
                 t *= tr as f32 * (1.0 / 255.0);
             }

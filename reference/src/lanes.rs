@@ -7,7 +7,10 @@
 //! the fuzz targets into a panic).
 
 use mlab::glam::Vec3;
-use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan, ResolvedLanes};
+use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, ResolvedLanes};
+
+/// An MLAB span, layer-major (`span[j][lane]`).
+type MlabSpan<const M: usize> = [[Row; LANES]; M];
 use mlab::{
     Arithmetic, Background, Fragment, Framebuffer, Hybrid, HybridSpanFramebuffer, Resolved, Row, SpanFramebuffer,
     TailFormat, mlab as listing1, to_rgba8,

@@ -308,7 +308,7 @@ impl TailLayout {
 pub fn ref_tail_fields(layout: TailLayout, start: [u64; 5], rows: &[Row]) -> [u64; 5] {
     let mut s = start;
     for r in rows {
-        let [cr, cg, cb, t] = r.rgbt();
+        let ([cr, cg, cb], t) = (r.color(), r.transmittance());
         if [cr, cg, cb, t] == [0, 0, 0, 255] {
             continue;
         }

@@ -82,8 +82,8 @@ pub const LANES: usize = 8;
 pub(crate) const LANES_U32: u32 = LANES as u32;
 
 /// An MLAB span: 8 pixels with `M` rows each, layer-major (`span[j][lane]` is row `j` of
-/// pixel `lane`).
-pub type MlabSpan<const M: usize> = [[Row; LANES]; M];
+/// pixel `lane`). The public signatures spell it out.
+pub(crate) type MlabSpan<const M: usize> = [[Row; LANES]; M];
 
 /// A Hybrid Transparency span: 8 pixels with `K` head rows (layer-major) and 8 tails of the
 /// arithmetic `A` ([`Unbiased`] by default).
@@ -110,7 +110,7 @@ impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
 /// every lane whose bit is set in `mask`. Byte-identical to
 /// [`crate::mlab::insert_with`]`::<A, M>` on each lane, for any rows.
 #[inline(always)] // a span insert is the inner loop of a rasterizer: never a call
-pub fn mlab_insert_with<A: Arithmetic, const M: usize>(span: &mut MlabSpan<M>, rows: &[Row; LANES], mask: u8) {
+pub fn mlab_insert_with<A: Arithmetic, const M: usize>(span: &mut [[Row; LANES]; M], rows: &[Row; LANES], mask: u8) {
     // Full spans (the common case) skip the mask: with a constant all-ones mask the
     // compiler drops the ANDs and the final select.
     if mask == 0xff {
@@ -173,7 +173,7 @@ pub struct ResolvedLanes {
 
 /// Eq. 5 over an MLAB span (as [`crate::resolve_rows`] on each pixel).
 #[inline]
-pub fn mlab_resolve<const M: usize>(span: &MlabSpan<M>) -> ResolvedLanes {
+pub fn mlab_resolve<const M: usize>(span: &[[Row; LANES]; M]) -> ResolvedLanes {
     x8::mlab_resolve(span).lanes()
 }
 
@@ -193,7 +193,7 @@ pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     x8::mlab_resolve_pixel_major(pixels).rgba8(background)
 }
 
-/// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
+/// HT resolve over a span (as [`Hybrid::resolve`](crate::Hybrid::resolve) on each pixel).
 #[inline]
 pub fn hybrid_resolve<const K: usize, A: Arithmetic>(span: &HybridSpan<K, A>) -> ResolvedLanes {
     x8::hybrid_resolve(&span.head, &span.tails).lanes()

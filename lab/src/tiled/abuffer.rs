@@ -79,7 +79,7 @@ impl Scratch {
             sort_by_depth(list);
             let (mut c, mut t) = (Vec3::ZERO, 1.0f32);
             for r in list.iter() {
-                let [cr, cg, cb, tr] = r.rgbt();
+                let ([cr, cg, cb], tr) = (r.color(), r.transmittance());
                 c += t * Vec3::new(cr as f32, cg as f32, cb as f32) * (1.0 / 255.0);
                 t *= tr as f32 * (1.0 / 255.0);
             }
