@@ -140,7 +140,26 @@ impl Fragment {
     /// Errors are checked in this order, and the first one found is returned: NaN (depth,
     /// alpha, color), then infinities (color, depth), then ranges (negative color, alpha
     /// outside `[0, 1]`, premultiplied color above 1).
+    #[inline]
+    #[expect(
+        clippy::manual_range_contains,
+        reason = "`&` of comparisons: no short circuit, one branch"
+    )]
     pub fn premultiplied(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        // One test of every bound, without branches (a NaN fails every comparison), then the
+        // documented order of errors only for a fragment that fails it.
+        let [r, g, b] = color.to_array();
+        let unit = |v: f32| (v >= 0.0) & (v <= 1.0);
+        if unit(r) & unit(g) & unit(b) & unit(alpha) & (depth.abs() < f32::INFINITY) {
+            return Ok(Fragment { color, alpha, depth });
+        }
+        Self::premultiplied_error(color, alpha, depth)
+    }
+
+    /// The error of an invalid premultiplied fragment, in the documented order.
+    #[cold]
+    #[inline(never)]
+    fn premultiplied_error(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
         Self::check_nans(color, alpha, depth)?;
         check_infinities(color, depth)?;
         check_color(color)?;
@@ -151,7 +170,43 @@ impl Fragment {
 
     /// A fragment from straight (non-premultiplied) color, alpha and depth. The stored color is
     /// `color * alpha` (one f32 multiply per channel), which must not exceed 1.
+    #[inline]
+    #[expect(
+        clippy::manual_range_contains,
+        reason = "`&` of comparisons: no short circuit, one branch"
+    )]
     pub fn straight(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        // As `premultiplied`: one branch-free test of every bound, the ordered checks only
+        // for a fragment that fails it. A finite straight color may exceed 1; its product
+        // with alpha may not.
+        let pre = color * alpha;
+        let [r, g, b] = color.to_array();
+        let [pr, pg, pb] = pre.to_array();
+        let finite = |v: f32| (v >= 0.0) & (v < f32::INFINITY);
+        if finite(r)
+            & finite(g)
+            & finite(b)
+            & (alpha >= 0.0)
+            & (alpha <= 1.0)
+            & (depth.abs() < f32::INFINITY)
+            & (pr <= 1.0)
+            & (pg <= 1.0)
+            & (pb <= 1.0)
+        {
+            return Ok(Fragment {
+                color: pre,
+                alpha,
+                depth,
+            });
+        }
+        Self::straight_error(color, alpha, depth)
+    }
+
+    /// The error of an invalid straight fragment, in the documented order (or, where none
+    /// is found, the fragment).
+    #[cold]
+    #[inline(never)]
+    fn straight_error(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
         Self::check_nans(color, alpha, depth)?;
         check_infinities(color, depth)?;
         check_color(color)?;
@@ -167,12 +222,14 @@ impl Fragment {
 
     /// A fragment from premultiplied `[R, G, B, A]` (color already multiplied by alpha; no
     /// glam type needed: any glam version's `to_array()` gives the array).
+    #[inline]
     pub fn premultiplied_rgba(rgba: [f32; 4], depth: f32) -> Result<Fragment, FragmentError> {
         let [r, g, b, a] = rgba;
         Fragment::premultiplied(Vec3::new(r, g, b), a, depth)
     }
 
     /// A fragment from straight `[R, G, B, A]` (color not multiplied by alpha).
+    #[inline]
     pub fn straight_rgba(rgba: [f32; 4], depth: f32) -> Result<Fragment, FragmentError> {
         let [r, g, b, a] = rgba;
         Fragment::straight(Vec3::new(r, g, b), a, depth)
