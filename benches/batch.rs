@@ -301,6 +301,7 @@ macro_rules! insert_benches {
 fn client(c: &mut Criterion) {
     let (w, h) = (640, 360);
     let events = mesh_raw(w, h);
+    println!("client_mesh: {} fragments", events.len());
     let mut g = c.benchmark_group("client_mesh");
     g.throughput(Throughput::Elements(events.len() as u64));
     let ev = &events;

@@ -2,7 +2,7 @@
 
 use crate::row::Row;
 use crate::unorm::quantize;
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 /// Why a fragment was rejected. Nothing is clamped or changed silently: a fragment is
 /// either valid as given or refused with one of these.
@@ -141,25 +141,22 @@ impl Fragment {
     /// alpha, color), then infinities (color, depth), then ranges (negative color, alpha
     /// outside `[0, 1]`, premultiplied color above 1).
     #[inline]
-    #[expect(
-        clippy::manual_range_contains,
-        reason = "`&` of comparisons: no short circuit, one branch"
-    )]
     pub fn premultiplied(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
-        // One test of every bound, without branches (a NaN fails every comparison), then the
-        // documented order of errors only for a fragment that fails it.
-        let [r, g, b] = color.to_array();
-        let unit = |v: f32| (v >= 0.0) & (v <= 1.0);
-        if unit(r) & unit(g) & unit(b) & unit(alpha) & (depth.abs() < f32::INFINITY) {
+        // One test of every bound (four lanes at once; a NaN fails every comparison), then
+        // the documented order of errors only for a fragment that fails it.
+        let v = color.extend(alpha);
+        if (v.cmpge(Vec4::ZERO) & v.cmple(Vec4::ONE)).all() & (depth.abs() < f32::INFINITY) {
             return Ok(Fragment { color, alpha, depth });
         }
-        Self::premultiplied_error(color, alpha, depth)
+        Self::premultiplied_error(color.x, color.y, color.z, alpha, depth)
     }
 
     /// The error of an invalid premultiplied fragment, in the documented order.
     #[cold]
     #[inline(never)]
-    fn premultiplied_error(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+    // Channels as scalars: they travel in registers, so the hot path stores nothing for it.
+    fn premultiplied_error(r: f32, g: f32, b: f32, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        let color = Vec3::new(r, g, b);
         Self::check_nans(color, alpha, depth)?;
         check_infinities(color, depth)?;
         check_color(color)?;
@@ -171,42 +168,31 @@ impl Fragment {
     /// A fragment from straight (non-premultiplied) color, alpha and depth. The stored color is
     /// `color * alpha` (one f32 multiply per channel), which must not exceed 1.
     #[inline]
-    #[expect(
-        clippy::manual_range_contains,
-        reason = "`&` of comparisons: no short circuit, one branch"
-    )]
     pub fn straight(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
-        // As `premultiplied`: one branch-free test of every bound, the ordered checks only
-        // for a fragment that fails it. A finite straight color may exceed 1; its product
-        // with alpha may not.
+        // As `premultiplied`: one test of every bound, the ordered checks only for a fragment
+        // that fails it. A straight color may exceed 1, its product with alpha may not; an
+        // infinite channel fails `pre <= 1` (its product is infinite, or NaN at alpha 0), so
+        // `color >= 0` and `pre <= 1` are the whole color test.
         let pre = color * alpha;
-        let [r, g, b] = color.to_array();
-        let [pr, pg, pb] = pre.to_array();
-        let finite = |v: f32| (v >= 0.0) & (v < f32::INFINITY);
-        if finite(r)
-            & finite(g)
-            & finite(b)
-            & (alpha >= 0.0)
-            & (alpha <= 1.0)
-            & (depth.abs() < f32::INFINITY)
-            & (pr <= 1.0)
-            & (pg <= 1.0)
-            & (pb <= 1.0)
-        {
+        let low = color.extend(alpha).cmpge(Vec4::ZERO);
+        let high = pre.extend(alpha).cmple(Vec4::ONE);
+        if (low & high).all() & (depth.abs() < f32::INFINITY) {
             return Ok(Fragment {
                 color: pre,
                 alpha,
                 depth,
             });
         }
-        Self::straight_error(color, alpha, depth)
+        Self::straight_error(color.x, color.y, color.z, alpha, depth)
     }
 
     /// The error of an invalid straight fragment, in the documented order (or, where none
     /// is found, the fragment).
     #[cold]
     #[inline(never)]
-    fn straight_error(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+    // Channels as scalars: they travel in registers, so the hot path stores nothing for it.
+    fn straight_error(r: f32, g: f32, b: f32, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        let color = Vec3::new(r, g, b);
         Self::check_nans(color, alpha, depth)?;
         check_infinities(color, depth)?;
         check_color(color)?;
