@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The per-pixel client passes (benches/previous_release.rs) against an older commit and this
+# The per-pixel client passes (benches/previous_release/bench.rs) against an older commit and this
 # checkout, interleaved (benches/interleave.py), and their instructions per call (callgrind).
 # Usage: benches/previous_release.sh [COMMIT] [ROUNDS]   (default 90750a7, 5 rounds)
 # Builds for the default target (SSE2), as the client measurement of issue 21 did; set
@@ -21,9 +21,11 @@ edition = "2024"
 [dependencies]
 mlab = { path = "$2" }
 criterion = { version = "0.8", default-features = false, features = ["cargo_bench_support"] }
+[features]
+current = []
 [[bench]]
 name = "release"
-path = "$repo/benches/previous_release.rs"
+path = "$repo/benches/previous_release/bench.rs"
 harness = false
 [workspace]
 TOML
@@ -32,9 +34,8 @@ crate "$work/old" "$work/kernel"
 crate "$work/new" "$repo"
 bins=()
 for side in old new; do
-  flags=${RUSTFLAGS:-}
-  if [ $side = new ]; then flags="$flags --cfg mlab_current"; fi
-  bin=$(cd "$work/$side" && RUSTFLAGS="$flags" cargo bench --no-run --message-format=json 2>/dev/null |
+  features=; if [ $side = new ]; then features="--features current"; fi
+  bin=$(cd "$work/$side" && cargo bench --no-run $features --message-format=json 2>/dev/null |
     python3 -c 'import json,sys
 for l in sys.stdin:
     m=json.loads(l)

@@ -2,19 +2,19 @@
 //! file also compiles against an older kernel (before the `Framebuffer` trait and the
 //! arithmetic parameter): `benches/previous_release.sh COMMIT` builds it against COMMIT and
 //! against this checkout and runs both interleaved. Not a bench target of the kernel's
-//! Cargo.toml (the script makes its own crates); `cfg(mlab_current)` selects today's API.
+//! Cargo.toml (the script makes its own crates); the feature `current` selects today's API.
 //!
 //! Each pass validates every fragment (`Fragment::straight`) and inserts it into a pixel-major
 //! framebuffer in the default arithmetic, 640 x 360 pixels, not cleared between iterations.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-#[cfg(mlab_current)]
+#[cfg(feature = "current")]
 use mlab::Framebuffer;
 use mlab::glam::Vec3;
 use mlab::{Fragment, HybridFramebuffer, MlabFramebuffer, Row};
 use std::hint::black_box;
 
-#[path = "../examples/common/raster.rs"]
+#[path = "../../examples/common/raster.rs"]
 #[allow(dead_code)]
 mod raster;
 
