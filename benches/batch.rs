@@ -11,6 +11,12 @@
 //! - `mesh`: the procedural tori of `examples/rasterizer.rs` (`examples/common/raster.rs`)
 //!   rasterized into 320 x 240 pixels, unsorted, replayed pixel by pixel.
 //!
+//! - `client_mesh`: the same scene at 640 x 360 as a renderer holds it before validation
+//!   (straight RGBA and depth per pixel event): every bench validates each fragment
+//!   (`Fragment::straight_rgba`) in the loop, as a client does, in both arithmetics;
+//!   `validate_only` is that validation alone (issue 21; `benches/previous_release.sh`
+//!   runs the per-pixel passes against an older commit).
+//!
 //! Framebuffers are not cleared between iterations (steady state: every array full, every
 //! insert merges), as in `benches/kernel.rs`.
 
@@ -19,7 +25,7 @@ use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::{
     Background, DynFramebuffer, Fragment, Framebuffer, HybridFramebuffer, HybridSpanFramebuffer, Layers,
-    MlabFramebuffer, Row, SpanBatcher, SpanFramebuffer,
+    MlabFramebuffer, Paper, Row, SpanBatcher, SpanFramebuffer,
 };
 use mlab_reference::Rng;
 use std::hint::black_box;
@@ -64,6 +70,47 @@ fn mesh(w: u32, h: u32) -> Vec<Event> {
     out
 }
 
+/// A pixel event before validation: pixel, straight `[R, G, B, A]`, depth.
+type RawEvent = (u32, u32, [f32; 4], f32);
+
+/// The scene of the rasterizer example with more triangles, unvalidated.
+fn mesh_raw(w: u32, h: u32) -> Vec<RawEvent> {
+    let mut out = Vec::new();
+    for t in raster::scene(w, h, 96, 48) {
+        let [r, g, b] = t.color;
+        raster::rasterize(&t, w, h, |x, y, z| out.push((x, y, [r, g, b, t.alpha], z)));
+    }
+    out
+}
+
+#[inline(always)]
+fn client_per_pixel<F: Framebuffer>(fb: &mut F, events: &[RawEvent]) {
+    for &(x, y, rgba, z) in events {
+        let f = Fragment::straight_rgba(rgba, z).expect("valid");
+        fb.insert(x, y, &f).expect("inside");
+    }
+}
+
+#[inline(always)]
+fn client_batched<F: Framebuffer>(fb: &mut F, events: &[RawEvent]) {
+    let mut batch = SpanBatcher::new(fb);
+    for &(x, y, rgba, z) in events {
+        let f = Fragment::straight_rgba(rgba, z).expect("valid");
+        batch.insert(x, y, &f).expect("inside");
+    }
+    batch.finish().expect("flush");
+}
+
+/// The validation of the client benches alone (the sum keeps it from being removed).
+#[inline(never)]
+fn validate_only(events: &[RawEvent]) -> f32 {
+    let mut sum = 0.0;
+    for &(_, _, rgba, z) in events {
+        sum += Fragment::straight_rgba(rgba, z).expect("valid").alpha();
+    }
+    sum
+}
+
 #[inline(always)]
 fn per_pixel<F: Framebuffer>(fb: &mut F, events: &[Event]) {
     for (x, y, f) in events {
@@ -89,6 +136,23 @@ macro_rules! drivers {
             $f(fb, events)
         }
     )*};
+    ($($name:ident: $fb:ty => $f:ident (raw);)*) => {$(
+        #[inline(never)]
+        fn $name(fb: &mut $fb, events: &[RawEvent]) {
+            $f(fb, events)
+        }
+    )*};
+}
+
+drivers! {
+    client_mlab4_per_pixel: MlabFramebuffer<'_, 4> => client_per_pixel (raw);
+    client_mlab4_paper_per_pixel: MlabFramebuffer<'_, 4, Paper> => client_per_pixel (raw);
+    client_mlab8_per_pixel: MlabFramebuffer<'_, 8> => client_per_pixel (raw);
+    client_ht3_per_pixel: HybridFramebuffer<'_, 3> => client_per_pixel (raw);
+    client_ht3_paper_per_pixel: HybridFramebuffer<'_, 3, Paper> => client_per_pixel (raw);
+    client_ht3_spans_per_pixel: HybridSpanFramebuffer<'_, 3> => client_per_pixel (raw);
+    client_mlab4_batcher: SpanFramebuffer<'_, 4> => client_batched (raw);
+    client_mlab4_paper_batcher: SpanFramebuffer<'_, 4, Paper> => client_batched (raw);
 }
 
 drivers! {
@@ -233,6 +297,49 @@ macro_rules! insert_benches {
     }};
 }
 
+/// `client_mesh/...`: validation in the loop, both arithmetics (see the module docs).
+fn client(c: &mut Criterion) {
+    let (w, h) = (640, 360);
+    let events = mesh_raw(w, h);
+    println!("client_mesh: {} fragments", events.len());
+    let mut g = c.benchmark_group("client_mesh");
+    g.throughput(Throughput::Elements(events.len() as u64));
+    let ev = &events;
+    macro_rules! bench {
+        ($id:literal, $fb:ty, $driver:ident) => {{
+            let mut st = vec![Row::EMPTY; <$fb>::rows_needed(w, h).expect("size")];
+            let mut fb = <$fb>::new_cleared(&mut st, w, h).expect("size");
+            g.bench_function($id, |b| b.iter(|| $driver(&mut fb, black_box(ev))));
+        }};
+    }
+    bench!("mlab4_per_pixel", MlabFramebuffer<'_, 4>, client_mlab4_per_pixel);
+    bench!(
+        "mlab4_paper_per_pixel",
+        MlabFramebuffer<'_, 4, Paper>,
+        client_mlab4_paper_per_pixel
+    );
+    bench!("mlab8_per_pixel", MlabFramebuffer<'_, 8>, client_mlab8_per_pixel);
+    bench!("ht3_per_pixel", HybridFramebuffer<'_, 3>, client_ht3_per_pixel);
+    bench!(
+        "ht3_paper_per_pixel",
+        HybridFramebuffer<'_, 3, Paper>,
+        client_ht3_paper_per_pixel
+    );
+    bench!(
+        "ht3_spans_per_pixel",
+        HybridSpanFramebuffer<'_, 3>,
+        client_ht3_spans_per_pixel
+    );
+    bench!("mlab4_batcher", SpanFramebuffer<'_, 4>, client_mlab4_batcher);
+    bench!(
+        "mlab4_paper_batcher",
+        SpanFramebuffer<'_, 4, Paper>,
+        client_mlab4_paper_batcher
+    );
+    g.bench_function("validate_only", |b| b.iter(|| validate_only(black_box(ev))));
+    g.finish();
+}
+
 fn batch(c: &mut Criterion) {
     println!("mlab lanes backend: {}", mlab::lanes::BACKEND);
     for (name, (w, h), events) in [
@@ -325,6 +432,6 @@ fn resolve(c: &mut Criterion) {
 criterion_group! {
     name = benches;
     config = Criterion::default().warm_up_time(std::time::Duration::from_millis(300)).measurement_time(std::time::Duration::from_secs(1)).sample_size(20);
-    targets = batch, resolve
+    targets = client, batch, resolve
 }
 criterion_main!(benches);

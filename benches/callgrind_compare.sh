@@ -17,6 +17,8 @@ driver() { # bench id -> driver symbol
         resolve_rgba8/*) echo batch::resolve_rgba8 ;;
         resolve_f32/*) echo batch::resolve_f32 ;;
         resolve_rgba16f/*) echo batch::resolve_f16 ;;
+        client_mesh/validate_only) echo batch::validate_only ;;
+        client_mesh/*) echo "batch::client_${id#*/}" ;;
         *) local n=${id#*/}; echo "batch::${n%%/*}" ;;
       esac ;;
     kernel)

@@ -43,7 +43,7 @@
 use crate::fragment::Fragment;
 use crate::row::Row;
 use crate::tail::{PaperTail, Tail, TailFormat};
-use crate::unorm::{div255_floor, mul};
+use crate::unorm::mul;
 
 /// Which arithmetic, for code that is written once for both (crate-internal).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,6 +78,17 @@ pub trait Arithmetic:
 
     /// Quantize a validated fragment into a row.
     fn quantize(fragment: &Fragment) -> Row;
+
+    /// The last step of Listing 1 on one pixel: `merge(a, b)` if `a_first`, else
+    /// `merge(b, a)`. The same bytes as selecting then merging; [`Unbiased`] hashes its
+    /// dither from the pair before the choice (the hash is symmetric), which takes the hash
+    /// off the insert's dependency chain.
+    #[doc(hidden)]
+    #[inline(always)]
+    fn merge_pair(a_first: bool, a: Row, b: Row) -> Row {
+        let (front, back) = if a_first { (a, b) } else { (b, a) };
+        Self::merge(front, back)
+    }
 }
 
 /// The paper's arithmetic: products rounded to nearest, fragments rounded to nearest, the
@@ -124,18 +135,15 @@ impl Arithmetic for Unbiased {
     /// `T = floor((T_front * T_back + d) / 255)`,
     /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255.
     #[inline(always)]
-    #[expect(
-        clippy::cast_possible_truncation,
-        reason = "floor((a * b + d) / 255) <= 255 for bytes a, b and d <= 254"
-    )]
     fn merge(front: Row, back: Row) -> Row {
-        let [ar, ag, ab, at] = front.rgbt();
-        let [br, bg, bb, bt] = back.rgbt();
-        let d = merge_dither(front, back);
-        let at32 = at as u32;
-        let add = |a: u8, b: u8| (a as u32 + div255_floor(b as u32 * at32 + 254 - d)).min(255) as u8;
-        let t = div255_floor(at32 * bt as u32 + d) as u8;
-        Row::new([add(ar, br), add(ag, bg), add(ab, bb)], t, front.depth())
+        unbiased_merge(front, back, merge_dither(front, back))
+    }
+
+    #[inline(always)]
+    fn merge_pair(a_first: bool, a: Row, b: Row) -> Row {
+        let d = merge_dither(a, b); // = merge_dither(b, a): the hash is symmetric
+        let (front, back) = if a_first { (a, b) } else { (b, a) };
+        unbiased_merge(front, back, d)
     }
 
     /// To nearest, as the paper's ([`Paper::quantize`](Arithmetic::quantize)), except for faint fragments
@@ -157,6 +165,41 @@ impl Arithmetic for Unbiased {
             fragment.row_nearest()
         }
     }
+}
+
+/// The four bytes `[R, G, B, T]` of a row's first word, one per 16-bit slot of a `u64`.
+#[inline(always)]
+const fn slots16(word0: u32) -> u64 {
+    let w = word0 as u64;
+    (w & 0xff) | ((w & 0xff00) << 8) | ((w & 0xff_0000) << 16) | ((w & 0xff00_0000) << 24)
+}
+
+/// [`Unbiased::merge`] with its dither `d` (`0..=254`), on one pixel, SWAR: the four
+/// products `A_back * T_front` (three colors) and `T_back * T_front` share the factor
+/// `T_front`, so they are one 64-bit multiply of the back row's bytes in 16-bit slots
+/// (each product <= 65025). Each slot then gets its dither (`254 - d` for the colors, `d` for
+/// `T`) and `floor(y / 255)` as `(z + (z >> 8)) >> 8` with `z = y + 1` (exact for
+/// `y <= 65279`, and `z + (z >> 8) <= 65535` stays in its slot), the front colors are added
+/// (at most 510: bit 8 flags the saturation to 255) and the slots are packed back to bytes.
+/// The same bytes as the per-channel formula (tested exhaustively over the products and
+/// dithers, and against the reference merge).
+#[inline(always)]
+#[expect(clippy::cast_possible_truncation, reason = "the packed bytes are the low 32 bits")]
+fn unbiased_merge(front: Row, back: Row, d: u32) -> Row {
+    const ONES: u64 = 0x0001_0001_0001_0001;
+    const BYTES: u64 = 0x00ff_00ff_00ff_00ff;
+    let [f0, f1] = front.words();
+    let [b0, _] = back.words();
+    let products = slots16(b0) * (f0 >> 24) as u64;
+    // Dither (and the `+ 1` of `z`): `254 - d` in the color slots, `d` in the T slot.
+    let dither = ((254 - d) as u64 * (ONES >> 16)) | ((d as u64) << 48);
+    let z = products + dither + ONES;
+    let q = ((z + ((z >> 8) & BYTES)) >> 8) & BYTES;
+    let sum = q + slots16(f0 & 0x00ff_ffff);
+    let saturated = (sum | (((sum >> 8) & ONES) * 0xff)) & BYTES;
+    let packed = saturated | (saturated >> 8);
+    let word0 = (packed & 0xffff) | ((packed >> 16) & 0xffff_0000);
+    Row::from_words([word0 as u32, f1])
 }
 
 /// The multiplier of the 16-bit mix (odd, so the mix is a bijection of the folded bits).
@@ -233,6 +276,7 @@ pub(crate) fn quantize_dithered(color: [f32; 3], alpha: f32, depth: f32) -> Row 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::unorm::div255_floor;
 
     /// The reference formula of the unbiased merge, for one pair of bytes and a dither.
     fn reference(a: u32, b: u32, d: u32) -> u32 {
@@ -245,6 +289,36 @@ mod tests {
             for b in 0..=255u32 {
                 for d in [0, 1, 127, 253, 254] {
                     assert_eq!(div255_floor(a * b + d), reference(a, b, d), "{a} {b} {d}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn slot_division_is_exact_floor() {
+        for y in 0..=255u32 * 255 + 254 {
+            let z = y + 1;
+            assert!(z + (z >> 8) <= 0xffff, "{y}: the slot overflows");
+            assert_eq!((z + (z >> 8)) >> 8, div255_floor(y), "{y}");
+        }
+    }
+
+    /// The SWAR merge against the per-channel formula of `Unbiased::merge`'s docs, for every
+    /// `T_front`, every back byte and every dither (front colors chosen to reach the
+    /// saturation and stay below it).
+    #[test]
+    #[expect(clippy::cast_possible_truncation, reason = "bytes by construction")]
+    fn swar_merge_is_the_per_channel_formula() {
+        for at in 0..=255u32 {
+            for b in 0..=255u32 {
+                let front_c = [(b + at) & 0xff, 255 - ((b + at) & 0xff), at];
+                let back_c = [b, 255 - b, b ^ 0x5a];
+                let front = Row::new(front_c.map(|v| v as u8), at as u8, 1.5);
+                let back = Row::new(back_c.map(|v| v as u8), b as u8, 2.5);
+                for d in 0..=254u32 {
+                    let c = |i: usize| (front_c[i] + (back_c[i] * at + 254 - d) / 255).min(255) as u8;
+                    let expected = Row::new([c(0), c(1), c(2)], ((at * b + d) / 255) as u8, 1.5);
+                    assert_eq!(unbiased_merge(front, back, d), expected, "T {at}, back {b}, d {d}");
                 }
             }
         }

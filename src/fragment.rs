@@ -2,7 +2,7 @@
 
 use crate::row::Row;
 use crate::unorm::quantize;
-use glam::Vec3;
+use glam::{Vec3, Vec4};
 
 /// Why a fragment was rejected. Nothing is clamped or changed silently: a fragment is
 /// either valid as given or refused with one of these.
@@ -140,7 +140,23 @@ impl Fragment {
     /// Errors are checked in this order, and the first one found is returned: NaN (depth,
     /// alpha, color), then infinities (color, depth), then ranges (negative color, alpha
     /// outside `[0, 1]`, premultiplied color above 1).
+    #[inline]
     pub fn premultiplied(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        // One test of every bound (four lanes at once; a NaN fails every comparison), then
+        // the documented order of errors only for a fragment that fails it.
+        let v = color.extend(alpha);
+        if (v.cmpge(Vec4::ZERO) & v.cmple(Vec4::ONE)).all() & (depth.abs() < f32::INFINITY) {
+            return Ok(Fragment { color, alpha, depth });
+        }
+        Self::premultiplied_error(color.x, color.y, color.z, alpha, depth)
+    }
+
+    /// The error of an invalid premultiplied fragment, in the documented order.
+    #[cold]
+    #[inline(never)]
+    // Channels as scalars: they travel in registers, so the hot path stores nothing for it.
+    fn premultiplied_error(r: f32, g: f32, b: f32, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        let color = Vec3::new(r, g, b);
         Self::check_nans(color, alpha, depth)?;
         check_infinities(color, depth)?;
         check_color(color)?;
@@ -151,7 +167,32 @@ impl Fragment {
 
     /// A fragment from straight (non-premultiplied) color, alpha and depth. The stored color is
     /// `color * alpha` (one f32 multiply per channel), which must not exceed 1.
+    #[inline]
     pub fn straight(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        // As `premultiplied`: one test of every bound, the ordered checks only for a fragment
+        // that fails it. A straight color may exceed 1, its product with alpha may not; an
+        // infinite channel fails `pre <= 1` (its product is infinite, or NaN at alpha 0), so
+        // `color >= 0` and `pre <= 1` are the whole color test.
+        let pre = color * alpha;
+        let low = color.extend(alpha).cmpge(Vec4::ZERO);
+        let high = pre.extend(alpha).cmple(Vec4::ONE);
+        if (low & high).all() & (depth.abs() < f32::INFINITY) {
+            return Ok(Fragment {
+                color: pre,
+                alpha,
+                depth,
+            });
+        }
+        Self::straight_error(color.x, color.y, color.z, alpha, depth)
+    }
+
+    /// The error of an invalid straight fragment, in the documented order (or, where none
+    /// is found, the fragment).
+    #[cold]
+    #[inline(never)]
+    // Channels as scalars: they travel in registers, so the hot path stores nothing for it.
+    fn straight_error(r: f32, g: f32, b: f32, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+        let color = Vec3::new(r, g, b);
         Self::check_nans(color, alpha, depth)?;
         check_infinities(color, depth)?;
         check_color(color)?;
@@ -167,12 +208,14 @@ impl Fragment {
 
     /// A fragment from premultiplied `[R, G, B, A]` (color already multiplied by alpha; no
     /// glam type needed: any glam version's `to_array()` gives the array).
+    #[inline]
     pub fn premultiplied_rgba(rgba: [f32; 4], depth: f32) -> Result<Fragment, FragmentError> {
         let [r, g, b, a] = rgba;
         Fragment::premultiplied(Vec3::new(r, g, b), a, depth)
     }
 
     /// A fragment from straight `[R, G, B, A]` (color not multiplied by alpha).
+    #[inline]
     pub fn straight_rgba(rgba: [f32; 4], depth: f32) -> Result<Fragment, FragmentError> {
         let [r, g, b, a] = rgba;
         Fragment::straight(Vec3::new(r, g, b), a, depth)

@@ -68,12 +68,13 @@ pub(crate) fn insert_lanes<A: Arithmetic, L: RowLanes, S: Slot<L>, const M: usiz
         let row = slot.load();
         let swap = f.depth_le(row) & on; // if (f.z <= B[i].z)
         let front = L::select(swap, f, row); // B[i] = f
-        f = L::select(swap, row, f); // f = temp
         if i + 1 < M {
+            f = L::select(swap, row, f); // f = temp
             slot.store(front);
         } else {
-            // Compression (merge last two rows): `f` is the row pushed out, B[m] in the listing.
-            slot.store(L::select(on, L::merge::<A>(front, f), front));
+            // Compression (merge last two rows): the row pushed out (`f` after the swap, B[m]
+            // in the listing) merged behind `front`.
+            slot.store(L::select(on, L::merge_pair::<A>(swap, f, row), front));
         }
     }
 }

@@ -19,6 +19,12 @@ pub(crate) trait RowLanes: Copy {
     fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
     /// Eq. 7-8 per lane in the arithmetic `A` ([`Arithmetic::merge`]).
     fn merge<A: Arithmetic>(front: Self, back: Self) -> Self;
+    /// Per lane, `merge(a, b)` where `a_first`, else `merge(b, a)`: the last step of
+    /// Listing 1 ([`Arithmetic::merge_pair`]).
+    #[inline(always)]
+    fn merge_pair<A: Arithmetic>(a_first: Self::Mask, a: Self, b: Self) -> Self {
+        Self::merge::<A>(Self::select(a_first, a, b), Self::select(a_first, b, a))
+    }
     /// [`TailFormat::add`] per lane.
     fn tail_add<T: TailFormat>(tail: Self::Tail<T>, row: Self) -> Self::Tail<T>;
     /// `if mask { a } else { b }` per lane, for tails.
@@ -40,6 +46,10 @@ impl RowLanes for Row {
     #[inline(always)]
     fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
         A::merge(front, back)
+    }
+    #[inline(always)]
+    fn merge_pair<A: Arithmetic>(a_first: bool, a: Self, b: Self) -> Self {
+        A::merge_pair(a_first, a, b)
     }
     #[inline(always)]
     fn tail_add<T: TailFormat>(tail: T, row: Self) -> T {

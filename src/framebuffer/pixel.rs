@@ -119,12 +119,18 @@ fn scatter<const N: usize>(px: &mut [Row], stride: usize, offset: usize, mask: u
     }
 }
 
-/// Run `f` on the rows of one lane of `N` layers (one pixel of a span), gathered into an
-/// array and scattered back: a pixel insert in scalar code on span storage.
+/// The rows of one lane of `N` layers (one pixel of a span), gathered into an array, for a
+/// pixel insert in scalar code on span storage ([`set_lane_rows`] writes them back). Two functions,
+/// not one taking a closure: a closure is a call where the caller is large
+/// (`DynFramebuffer`'s match over every size).
 #[inline(always)]
-fn with_lane<const N: usize>(layers: &mut [[Row; LANES]; N], lane: usize, f: impl FnOnce(&mut [Row; N])) {
-    let mut px: [Row; N] = core::array::from_fn(|j| layers[j].get(lane).copied().unwrap_or(Row::EMPTY));
-    f(&mut px);
+fn lane_rows<const N: usize>(layers: &[[Row; LANES]; N], lane: usize) -> [Row; N] {
+    core::array::from_fn(|j| layers[j].get(lane).copied().unwrap_or(Row::EMPTY))
+}
+
+/// Write back what [`lane_rows`] read.
+#[inline(always)]
+fn set_lane_rows<const N: usize>(layers: &mut [[Row; LANES]; N], lane: usize, px: [Row; N]) {
     for (layer, r) in layers.iter_mut().zip(px) {
         if let Some(slot) = layer.get_mut(lane) {
             *slot = r;
@@ -230,7 +236,9 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
             if cfg!(target_feature = "avx") {
                 lanes::mlab_insert_with::<A, M>(l, &[row; LANES], 1 << (lane % LANES));
             } else {
-                with_lane(l, lane, |px| mlab::insert_with::<A, M>(px, row));
+                let mut px = lane_rows(l, lane);
+                mlab::insert_with::<A, M>(&mut px, row);
+                set_lane_rows(l, lane, px);
             }
         }
     }
@@ -390,7 +398,9 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         if let Some((head, tails)) = Self::parts_mut(span)
             && let Some(tail) = tails.get_mut(lane)
         {
-            with_lane(head, lane, |px| hybrid::insert(px, tail, row));
+            let mut px = lane_rows(head, lane);
+            hybrid::insert(&mut px, tail, row);
+            set_lane_rows(head, lane, px);
         }
     }
 
