@@ -87,6 +87,12 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     fn span_resolve(span: &[Row]) -> ResolvedLanes;
     #[doc(hidden)]
     fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES];
+    /// The RGBA8 of 8 empty pixels (a span that does not exist), as this kind's RGBA8
+    /// resolve writes an empty pixel.
+    #[doc(hidden)]
+    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
+        clear_rgba8(background)
+    }
 }
 
 /// Gather rows `offset..offset + N` of each pixel of `px` (`stride` rows per pixel, at most
@@ -251,8 +257,14 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
         match layers::<M>(span) {
             Some(l) => lanes::mlab_resolve_rgba8(l, background),
-            None => clear_rgba8(background),
+            None => Self::clear_rgba8(background),
         }
+    }
+
+    /// The integer resolve of an empty pixel (`resolve::int`), which for a background that
+    /// is not a byte value may differ from [`crate::to_rgba8`] of it by one step.
+    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
+        [crate::resolve::int::rgba8(&[], background); LANES]
     }
 }
 

@@ -184,13 +184,13 @@ pub(crate) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES
     x8::mlab_resolve_pixel_major(pixels).lanes()
 }
 
-/// [`mlab_resolve_pixel_major`] straight to RGBA8.
+/// The integer RGBA8 resolve ([`mlab_resolve_rgba8`]) of 8 pixels stored pixel-major.
 #[inline(always)]
 pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     pixels: &[[Row; M]; LANES],
     background: Background,
 ) -> [[u8; 4]; LANES] {
-    x8::mlab_resolve_pixel_major(pixels).rgba8(background)
+    x8::mlab_resolve_pixel_major_rgba8_int(pixels, crate::resolve::int::background(background))
 }
 
 /// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
@@ -221,22 +221,16 @@ impl ResolvedLanes {
     }
 }
 
-/// [`mlab_resolve`] straight to RGBA8, without leaving the registers until the end.
-#[inline]
-pub fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
-    x8::mlab_resolve(span).rgba8(background)
+/// The integer RGBA8 resolve of an MLAB span (`docs/layout.md`, "Integer resolve"; what
+/// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) writes for MLAB), in
+/// 16-bit lanes: byte-identical to the scalar `resolve::int::rgba8` of each pixel.
+#[inline(always)]
+pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
+    x8::mlab_resolve_rgba8_int(span, crate::resolve::int::background(background))
 }
 
-/// [`hybrid_resolve`] straight to RGBA8.
-#[inline]
-pub fn hybrid_resolve_rgba8<const K: usize, A: Arithmetic>(
-    span: &HybridSpan<K, A>,
-    background: Background,
-) -> [[u8; 4]; LANES] {
-    hybrid_resolve_parts_rgba8(&span.head, &span.tails, background)
-}
-
-/// [`hybrid_resolve_rgba8`] on separate head layers and tails.
+/// The HT resolve of separate head layers and tails straight to RGBA8 (f32, then
+/// [`crate::to_rgba8`] per lane).
 #[inline(always)]
 pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],

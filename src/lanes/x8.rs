@@ -10,7 +10,7 @@ use crate::row::Row;
 use crate::tail::{Layout, TailFormat};
 use crate::vector::{RowLanes, Slot};
 use bytemuck::cast;
-use wide::{f32x8, f64x4, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
+use wide::{f32x8, f64x4, i8x32, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
 
 use super::LANES;
 
@@ -799,6 +799,127 @@ pub(super) fn hybrid_resolve<T: TailFormat, const K: usize>(head: &[[Row; LANES]
 #[inline(always)]
 pub(super) fn rgba8(color: &[[f32; LANES]; 3], t: &[f32; LANES], background: Background) -> [[u8; 4]; LANES] {
     rgba8_lanes(color.map(f32x8::new), f32x8::new(*t), background)
+}
+
+/// The integer resolve (`crate::resolve::int`) in 16-bit lanes: four pixels per register,
+/// each pixel's four 16-bit slots `[R, G, B, T]` (its 8 bytes of a 128-bit half). Per layer,
+/// one shuffle, one shift, one `pmulhrsw`, one saturating add and one shuffle.
+mod int8 {
+    use super::*;
+    use crate::resolve::int;
+
+    /// A zeroing shuffle index.
+    const Z: i8 = -128;
+
+    /// Two copies of a 16-byte shuffle (each 128-bit half shuffles its own bytes).
+    const fn halves(h: [i8; 16]) -> i8x32 {
+        let mut out = [0i8; 32];
+        let mut i = 0;
+        while i < 16 {
+            out[i] = h[i];
+            out[i + 16] = h[i];
+            i += 1;
+        }
+        i8x32::new(out)
+    }
+
+    /// Each row's bytes to the 16-bit slots `[256 R, 256 G, 256 B, 257 T]` (two rows per half;
+    /// the depth bytes are dropped).
+    const ROW_SLOTS: [i8; 16] = [Z, 0, Z, 1, Z, 2, 3, 3, Z, 8, Z, 9, Z, 10, 11, 11];
+    /// Slot 3 of each pixel (its visibility product) to all four of its slots.
+    const BROADCAST_T: [i8; 16] = [6, 7, 6, 7, 6, 7, 6, 7, 14, 15, 14, 15, 14, 15, 14, 15];
+    /// The low bytes of the 16-bit slots of `a | b << 8`: per half, `a`'s 8 bytes then `b`'s.
+    const PACK: [i8; 16] = [0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15];
+
+    /// Four rows (pixels) as the factors `[128 R, 128 G, 128 B, floor(257 T / 2)]`.
+    #[inline(always)]
+    pub(super) fn factors(rows: [Row; 4]) -> i16x16 {
+        let x: i8x32 = cast(rows);
+        let s: u16x16 = cast(x.swizzle_half(halves(ROW_SLOTS)));
+        cast(s >> 1)
+    }
+
+    /// One layer of four pixels: `acc += q15(f, v)` (saturating at 32767), then
+    /// `v = q15(T factor, v)` in every slot of the pixel.
+    #[inline(always)]
+    pub(super) fn layer(acc: &mut i16x16, v: &mut i16x16, f: i16x16) {
+        let p = f.mul_scale_round(*v);
+        *acc = acc.saturating_add(p);
+        *v = cast(cast::<i16x16, i8x32>(p).swizzle_half(halves(BROADCAST_T)));
+    }
+
+    /// Eq. 5 in integers over `m` layers of 8 pixels (`layer(j)`: the factors of pixels 0..4
+    /// and 4..8), then the pixels (`int::pixel` per lane).
+    #[inline(always)]
+    pub(super) fn resolve(m: usize, layer_factors: impl Fn(usize) -> [i16x16; 2], bg: Option<[u32; 3]>) -> [[u8; 4]; LANES] {
+        let mut acc = [i16x16::splat(int::ACC_START as i16); 2];
+        let mut v = [i16x16::splat(int::VIS_ONE as i16); 2];
+        for j in 0..m {
+            let f = layer_factors(j);
+            layer(&mut acc[0], &mut v[0], f[0]);
+            layer(&mut acc[1], &mut v[1], f[1]);
+        }
+        pixels(acc, v, bg)
+    }
+
+    /// `int::pixel` on 8 pixels: the 16-bit results, then their low bytes in pixel order.
+    #[inline(always)]
+    fn pixels(acc: [i16x16; 2], v: [i16x16; 2], bg: Option<[u32; 3]>) -> [[u8; 4]; LANES] {
+        let q: [u16x16; 2] = match bg {
+            Some([r, g, b]) => {
+                let bg = i16x16::new(core::array::from_fn(|i| [r, g, b, 0][i % 4] as i16));
+                [0, 1].map(|i| cast::<i16x16, u16x16>(acc[i].saturating_add(bg.mul_scale_round(v[i]))) >> 7)
+            }
+            None => {
+                let color = u16x16::new(core::array::from_fn(|i| if i % 4 == 3 { 0 } else { 0xffff }));
+                [0, 1].map(|i| {
+                    let a = (i16x16::splat(int::VIS_ONE as i16) - v[i]).mul_scale_round(i16x16::splat(32640));
+                    let a = cast::<i16x16, u16x16>(a + i16x16::splat(64)) >> 7;
+                    let c = cast::<i16x16, u16x16>(acc[i]) >> 7;
+                    (c & color) | (a & !color)
+                })
+            }
+        };
+        let bytes: [u64; 4] = cast(cast::<u16x16, i8x32>(q[0] | (q[1] << 8)).swizzle_half(halves(PACK)));
+        // The halves hold pixels [0, 1, 4, 5] and [2, 3, 6, 7].
+        let mut words: [u32; LANES] = cast([bytes[0], bytes[2], bytes[1], bytes[3]]);
+        if bg.is_some() {
+            words = (u32x8::new(words) | u32x8::splat(0xff00_0000)).to_array();
+        }
+        words.map(u32::to_le_bytes)
+    }
+}
+
+/// The integer RGBA8 resolve of an MLAB span (layer-major).
+#[inline(always)]
+pub(super) fn mlab_resolve_rgba8_int<const M: usize>(span: &MlabSpan<M>, bg: Option<[u32; 3]>) -> [[u8; 4]; LANES] {
+    int8::resolve(
+        M,
+        |j| {
+            let l = span.get(j).copied().unwrap_or([Row::EMPTY; LANES]);
+            [
+                int8::factors([l[0], l[1], l[2], l[3]]),
+                int8::factors([l[4], l[5], l[6], l[7]]),
+            ]
+        },
+        bg,
+    )
+}
+
+/// The integer RGBA8 resolve of 8 pixels stored pixel-major (`pixels[lane][layer]`).
+#[inline(always)]
+pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize>(
+    pixels: &[[Row; M]; LANES],
+    bg: Option<[u32; 3]>,
+) -> [[u8; 4]; LANES] {
+    int8::resolve(
+        M,
+        |j| {
+            let r = |p: usize| pixels[p].get(j).copied().unwrap_or(Row::EMPTY);
+            [int8::factors([r(0), r(1), r(2), r(3)]), int8::factors([r(4), r(5), r(6), r(7)])]
+        },
+        bg,
+    )
 }
 
 #[cfg(test)]
