@@ -263,7 +263,7 @@ impl Arrangement for Spans {
 
     #[inline(always)]
     fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background) {
-        units::<P, _>(line, out, |s| P::span_resolve_rgba8(s, bg));
+        P::span_resolve_line_rgba8(line, out, bg);
     }
 }
 

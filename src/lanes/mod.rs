@@ -190,7 +190,39 @@ pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     pixels: &[[Row; M]; LANES],
     background: Background,
 ) -> [[u8; 4]; LANES] {
-    x8::mlab_resolve_pixel_major_rgba8_int(pixels, crate::resolve::int::background(background))
+    match crate::resolve::int::background(background) {
+        Some(bg) => x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(pixels, bg),
+        None => x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(pixels, [0; 3]),
+    }
+}
+
+/// [`mlab_resolve_pixel_major_rgba8`] of whole spans of pixel-major pixels into `out`, the
+/// background's case chosen once.
+#[inline(always)]
+pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
+    pixels: &[[[Row; M]; LANES]],
+    out: &mut [[[u8; 4]; LANES]],
+    background: Background,
+) {
+    let pairs = out.iter_mut().zip(pixels);
+    match crate::resolve::int::background(background) {
+        Some(bg) => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(p, bg)),
+        None => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(p, [0; 3])),
+    }
+}
+
+/// [`mlab_resolve_rgba8`] of whole stored spans into `out`, the background's case chosen once.
+#[inline(always)]
+pub(crate) fn mlab_resolve_line_rgba8<const M: usize>(
+    spans: &[MlabSpan<M>],
+    out: &mut [[[u8; 4]; LANES]],
+    background: Background,
+) {
+    let pairs = out.iter_mut().zip(spans);
+    match crate::resolve::int::background(background) {
+        Some(bg) => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, true>(s, bg)),
+        None => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, false>(s, [0; 3])),
+    }
 }
 
 /// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
@@ -226,7 +258,10 @@ impl ResolvedLanes {
 /// 16-bit lanes: byte-identical to the scalar `resolve::int::rgba8` of each pixel.
 #[inline(always)]
 pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
-    x8::mlab_resolve_rgba8_int(span, crate::resolve::int::background(background))
+    match crate::resolve::int::background(background) {
+        Some(bg) => x8::mlab_resolve_rgba8_int::<M, true>(span, bg),
+        None => x8::mlab_resolve_rgba8_int::<M, false>(span, [0; 3]),
+    }
 }
 
 /// The HT resolve of separate head layers and tails straight to RGBA8 (f32, then

@@ -828,8 +828,10 @@ mod int8 {
     const ROW_SLOTS: [i8; 16] = [Z, 0, Z, 1, Z, 2, 3, 3, Z, 8, Z, 9, Z, 10, 11, 11];
     /// Slot 3 of each pixel (its visibility product) to all four of its slots.
     const BROADCAST_T: [i8; 16] = [6, 7, 6, 7, 6, 7, 6, 7, 14, 15, 14, 15, 14, 15, 14, 15];
-    /// The low bytes of the 16-bit slots of `a | b << 8`: per half, `a`'s 8 bytes then `b`'s.
-    const PACK: [i8; 16] = [0, 2, 4, 6, 8, 10, 12, 14, 1, 3, 5, 7, 9, 11, 13, 15];
+    /// The low bytes of the 16-bit slots of a half to its bytes 0..8 (`PACK_LO`) or 8..16
+    /// (`PACK_HI`), the other bytes zero.
+    const PACK_LO: [i8; 16] = [0, 2, 4, 6, 8, 10, 12, 14, Z, Z, Z, Z, Z, Z, Z, Z];
+    const PACK_HI: [i8; 16] = [Z, Z, Z, Z, Z, Z, Z, Z, 0, 2, 4, 6, 8, 10, 12, 14];
 
     /// Four rows (pixels) as the factors `[128 R, 128 G, 128 B, floor(257 T / 2)]`.
     #[inline(always)]
@@ -849,51 +851,61 @@ mod int8 {
     }
 
     /// Eq. 5 in integers over `m` layers of 8 pixels (`layer(j)`: the factors of pixels 0..4
-    /// and 4..8), then the pixels (`int::pixel` per lane).
+    /// and 4..8), then the pixels (`int::pixel` per lane): over the opaque background `bg`
+    /// when `OPAQUE`, else premultiplied (`bg` unused).
     #[inline(always)]
-    pub(super) fn resolve(m: usize, layer_factors: impl Fn(usize) -> [i16x16; 2], bg: Option<[u32; 3]>) -> [[u8; 4]; LANES] {
-        let mut acc = [i16x16::splat(int::ACC_START as i16); 2];
+    pub(super) fn resolve<const OPAQUE: bool>(
+        m: usize,
+        layer_factors: impl Fn(usize) -> [i16x16; 2],
+        bg: [u32; 3],
+    ) -> [[u8; 4]; LANES] {
+        // Over an opaque background slot 3 (the visibility products, not read) starts at
+        // 32767 and stays there (saturating adds of non-negative values): its byte is the
+        // alpha 255.
+        let start = int::ACC_START as i16;
+        let alpha = if OPAQUE { int::ACC_MAX as i16 } else { start };
+        let mut acc = [i16x16::new(core::array::from_fn(|i| if i % 4 == 3 { alpha } else { start })); 2];
         let mut v = [i16x16::splat(int::VIS_ONE as i16); 2];
         for j in 0..m {
             let f = layer_factors(j);
             layer(&mut acc[0], &mut v[0], f[0]);
             layer(&mut acc[1], &mut v[1], f[1]);
         }
-        pixels(acc, v, bg)
+        pixels::<OPAQUE>(acc, v, bg)
     }
 
     /// `int::pixel` on 8 pixels: the 16-bit results, then their low bytes in pixel order.
     #[inline(always)]
-    fn pixels(acc: [i16x16; 2], v: [i16x16; 2], bg: Option<[u32; 3]>) -> [[u8; 4]; LANES] {
-        let q: [u16x16; 2] = match bg {
-            Some([r, g, b]) => {
-                let bg = i16x16::new(core::array::from_fn(|i| [r, g, b, 0][i % 4] as i16));
-                [0, 1].map(|i| cast::<i16x16, u16x16>(acc[i].saturating_add(bg.mul_scale_round(v[i]))) >> 7)
-            }
-            None => {
-                let color = u16x16::new(core::array::from_fn(|i| if i % 4 == 3 { 0 } else { 0xffff }));
-                [0, 1].map(|i| {
-                    let a = (i16x16::splat(int::VIS_ONE as i16) - v[i]).mul_scale_round(i16x16::splat(32640));
-                    let a = cast::<i16x16, u16x16>(a + i16x16::splat(64)) >> 7;
-                    let c = cast::<i16x16, u16x16>(acc[i]) >> 7;
-                    (c & color) | (a & !color)
-                })
-            }
+    fn pixels<const OPAQUE: bool>(acc: [i16x16; 2], v: [i16x16; 2], bg: [u32; 3]) -> [[u8; 4]; LANES] {
+        let q: [u16x16; 2] = if OPAQUE {
+            let [r, g, b] = bg;
+            let bg = i16x16::new(core::array::from_fn(|i| [r, g, b, 0][i % 4] as i16));
+            [0, 1].map(|i| cast::<i16x16, u16x16>(acc[i].saturating_add(bg.mul_scale_round(v[i]))) >> 7)
+        } else {
+            let color = u16x16::new(core::array::from_fn(|i| if i % 4 == 3 { 0 } else { 0xffff }));
+            [0, 1].map(|i| {
+                let a = (i16x16::splat(int::VIS_ONE as i16) - v[i]).mul_scale_round(i16x16::splat(32640));
+                let a = cast::<i16x16, u16x16>(a + i16x16::splat(64)) >> 7;
+                let c = cast::<i16x16, u16x16>(acc[i]) >> 7;
+                (c & color) | (a & !color)
+            })
         };
-        let bytes: [u64; 4] = cast(cast::<u16x16, i8x32>(q[0] | (q[1] << 8)).swizzle_half(halves(PACK)));
+        let lo = cast::<u16x16, i8x32>(q[0]).swizzle_half(halves(PACK_LO));
+        let hi = cast::<u16x16, i8x32>(q[1]).swizzle_half(halves(PACK_HI));
+        let bytes: [u64; 4] = cast(lo | hi);
         // The halves hold pixels [0, 1, 4, 5] and [2, 3, 6, 7].
-        let mut words: [u32; LANES] = cast([bytes[0], bytes[2], bytes[1], bytes[3]]);
-        if bg.is_some() {
-            words = (u32x8::new(words) | u32x8::splat(0xff00_0000)).to_array();
-        }
+        let words: [u32; LANES] = cast([bytes[0], bytes[2], bytes[1], bytes[3]]);
         words.map(u32::to_le_bytes)
     }
 }
 
 /// The integer RGBA8 resolve of an MLAB span (layer-major).
 #[inline(always)]
-pub(super) fn mlab_resolve_rgba8_int<const M: usize>(span: &MlabSpan<M>, bg: Option<[u32; 3]>) -> [[u8; 4]; LANES] {
-    int8::resolve(
+pub(super) fn mlab_resolve_rgba8_int<const M: usize, const OPAQUE: bool>(
+    span: &MlabSpan<M>,
+    bg: [u32; 3],
+) -> [[u8; 4]; LANES] {
+    int8::resolve::<OPAQUE>(
         M,
         |j| {
             let l = span.get(j).copied().unwrap_or([Row::EMPTY; LANES]);
@@ -908,11 +920,11 @@ pub(super) fn mlab_resolve_rgba8_int<const M: usize>(span: &MlabSpan<M>, bg: Opt
 
 /// The integer RGBA8 resolve of 8 pixels stored pixel-major (`pixels[lane][layer]`).
 #[inline(always)]
-pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize>(
+pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize, const OPAQUE: bool>(
     pixels: &[[Row; M]; LANES],
-    bg: Option<[u32; 3]>,
+    bg: [u32; 3],
 ) -> [[u8; 4]; LANES] {
-    int8::resolve(
+    int8::resolve::<OPAQUE>(
         M,
         |j| {
             let r = |p: usize| pixels[p].get(j).copied().unwrap_or(Row::EMPTY);
