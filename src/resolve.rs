@@ -6,9 +6,15 @@
 //! ```
 //!
 //! Evaluated in f32 in one fixed order (per row, with `v` the visibility so far and bytes
-//! as exact f32: `w = v * (1/255)`, `a += byte * w`, `v = T_byte * w`), with separate
-//! multiplies and adds, never FMA.
-//! The lane kernels evaluate the same expression tree, so their pixels are bit-identical.
+//! as exact f32: `w = v * (1/255)`, `a += byte * w`, `v = T_byte * w`, every row visited,
+//! empty rows too), with separate multiplies and adds, never FMA; the exact programs of
+//! the MLAB and HT f32 resolves, and of the background and the pixel writers, are in
+//! `docs/layout.md` ("Resolve"). The lane kernels evaluate the same expression tree, so
+//! their pixels are bit-identical.
+//!
+//! MLAB's RGBA8 ([`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8)) is the
+//! integer resolve of `docs/layout.md` ("Integer resolve"), crate-private module `int`: Q15
+//! visibility, `(x y + 16384) >> 15` products, saturating 16-bit accumulators.
 
 use glam::{Vec3, Vec4};
 use half::f16;
