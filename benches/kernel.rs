@@ -17,7 +17,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
 use mlab::{
-    Arithmetic, Background, Framebuffer, Paper, Row, SpanFramebuffer, TailFormat, Unbiased, hybrid, mlab as listing1, resolve_rows, to_rgba8,
+    Arithmetic, Background, Framebuffer, Paper, Row, SpanFramebuffer, TailFormat, Unbiased, hybrid, mlab as listing1,
+    resolve_rows, to_rgba8,
 };
 use mlab_reference::Rng;
 use std::hint::black_box;

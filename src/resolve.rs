@@ -417,7 +417,11 @@ mod int_tests {
         let span: [[Row; LANES]; M] = core::array::from_fn(|j| core::array::from_fn(|p| pixels[p][j]));
         for bg in BACKGROUNDS {
             let want = pixels.map(|p| int::rgba8(&p, bg));
-            assert_eq!(lanes::mlab_resolve_rgba8(&span, bg), want, "M = {M} spans {bg:?}: {pixels:?}");
+            assert_eq!(
+                lanes::mlab_resolve_rgba8(&span, bg),
+                want,
+                "M = {M} spans {bg:?}: {pixels:?}"
+            );
             assert_eq!(
                 lanes::mlab_resolve_pixel_major_rgba8(&pixels, bg),
                 want,
@@ -442,7 +446,10 @@ mod int_tests {
         // Each `T = 255` row lowers `v` by one unit while `v > 16384` (docs/layout.md): 300
         // of them leave alpha 2 (255 * 300 / 32767 = 2.3).
         assert_eq!(want, [255, 255, 255, 2]);
-        assert_eq!(lanes::mlab_resolve_rgba8(&bright, Background::Transparent), [want; LANES]);
+        assert_eq!(
+            lanes::mlab_resolve_rgba8(&bright, Background::Transparent),
+            [want; LANES]
+        );
     }
 
     /// Every single row (each channel sees every (color, T) pair) in lanes and scalar.

@@ -162,7 +162,10 @@ fn check_resolves<F: Framebuffer>(fb: &F) {
             for (i, (a, b)) in rgba8.iter().zip(&f32_rgba8).enumerate() {
                 let (x, y) = (i as u32 % w, i as u32 / w);
                 assert_eq!(*a, fb.resolve_span_rgba8(x / 8, y, bg)[x as usize % 8], "({x}, {y})");
-                assert!(a.iter().zip(b).all(|(p, q)| p.abs_diff(*q) <= 1), "({x}, {y}): {a:?} vs {b:?}");
+                assert!(
+                    a.iter().zip(b).all(|(p, q)| p.abs_diff(*q) <= 1),
+                    "({x}, {y}): {a:?} vs {b:?}"
+                );
             }
         } else {
             assert_eq!(rgba8, f32_rgba8);

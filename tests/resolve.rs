@@ -44,7 +44,10 @@ fn check<const M: usize>(pixels: &[[Row; M]], w: u32) {
         for (name, fb) in [("pixel-major", &pm as &dyn Rgba8), ("spans", &sp), ("dyn", &dy)] {
             let got = fb.rgba8(n, bg);
             if let Some(i) = (0..n).find(|&i| got[i] != want[i]) {
-                panic!("M = {M} {name} {bg:?} pixel {i} {:?}: {:?}, reference {:?}", pixels[i], got[i], want[i]);
+                panic!(
+                    "M = {M} {name} {bg:?} pixel {i} {:?}: {:?}, reference {:?}",
+                    pixels[i], got[i], want[i]
+                );
             }
         }
         let in_range = match bg {

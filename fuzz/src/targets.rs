@@ -183,13 +183,19 @@ fn check_int_resolve<const M: usize>(rows: &[Row; M], context: &dyn core::fmt::D
             .expect("8 x 1")
             .resolve_rgba8(&mut out, bg)
             .expect("8 x 1");
-        assert_eq!(out, [want; LANES], "M = {M} pixel-major integer resolve {bg:?} of {rows:?} ({context:?})");
+        assert_eq!(
+            out, [want; LANES],
+            "M = {M} pixel-major integer resolve {bg:?} of {rows:?} ({context:?})"
+        );
         let mut sp: Vec<Row> = rows.iter().flat_map(|&r| [r; LANES]).collect();
         Grid::<mlab::Mlab<M>, Spans>::new(&mut sp, 8, 1)
             .expect("8 x 1")
             .resolve_rgba8(&mut out, bg)
             .expect("8 x 1");
-        assert_eq!(out, [want; LANES], "M = {M} span integer resolve {bg:?} of {rows:?} ({context:?})");
+        assert_eq!(
+            out, [want; LANES],
+            "M = {M} span integer resolve {bg:?} of {rows:?} ({context:?})"
+        );
         let exact = mlab_reference::resolve_int::exact(rows, bg);
         let bound = mlab_reference::resolve_int::bound(rows, bg);
         for ch in 0..4 {

@@ -82,7 +82,10 @@ fn run<const M: usize>(stream: &Stream, bins: &PixelBins) {
         }
         let rows = fb.pixel(x, y).expect("inside");
         let (c, v) = composite_rows_f64(&rows);
-        let layers: Vec<mlab::Fragment> = frags.iter().map(|&j| stream.frags[j as usize].to_kernel().expect("valid")).collect();
+        let layers: Vec<mlab::Fragment> = frags
+            .iter()
+            .map(|&j| stream.frags[j as usize].to_kernel().expect("valid"))
+            .collect();
         let (oc, _) = mlab_reference::oracle(&layers, bgd);
         for ch in 0..3 {
             let rows_exact = 255.0 * (c[ch] + bgd[ch] * v);

@@ -9,8 +9,8 @@
 use mlab::glam::Vec3;
 use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan, ResolvedLanes};
 use mlab::{
-    Arithmetic, Background, Fragment, Framebuffer, Hybrid, HybridSpanFramebuffer, Resolved, Row, SpanFramebuffer,
-    TailFormat, MlabFramebuffer, mlab as listing1, to_rgba8,
+    Arithmetic, Background, Fragment, Framebuffer, Hybrid, HybridSpanFramebuffer, MlabFramebuffer, Resolved, Row,
+    SpanFramebuffer, TailFormat, mlab as listing1, to_rgba8,
 };
 
 use crate::model::Model;

@@ -46,7 +46,12 @@ pub fn rgba8(rows: &[Row], bg: Background) -> [u8; 4] {
         }
         Background::Transparent => {
             let a = (q15(32767 - v, 32640) + 64) / 128;
-            [(acc[0] / 128) as u8, (acc[1] / 128) as u8, (acc[2] / 128) as u8, a as u8]
+            [
+                (acc[0] / 128) as u8,
+                (acc[1] / 128) as u8,
+                (acc[2] / 128) as u8,
+                a as u8,
+            ]
         }
     }
 }
@@ -60,9 +65,20 @@ pub fn exact(rows: &[Row], bg: Background) -> [f64; 4] {
     match bg {
         Background::Opaque(b) => {
             let b = b.to_array();
-            [0, 1, 2].map(|i| clamp(255.0 * (c[i] + f64::from(b[i]) * v))).into_iter().chain([255.0]).collect::<Vec<_>>().try_into().unwrap()
+            [0, 1, 2]
+                .map(|i| clamp(255.0 * (c[i] + f64::from(b[i]) * v)))
+                .into_iter()
+                .chain([255.0])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap()
         }
-        Background::Transparent => [clamp(255.0 * c[0]), clamp(255.0 * c[1]), clamp(255.0 * c[2]), clamp(255.0 * (1.0 - v))],
+        Background::Transparent => [
+            clamp(255.0 * c[0]),
+            clamp(255.0 * c[1]),
+            clamp(255.0 * c[2]),
+            clamp(255.0 * (1.0 - v)),
+        ],
     }
 }
 

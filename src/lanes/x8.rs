@@ -10,7 +10,7 @@ use crate::row::Row;
 use crate::tail::{Layout, TailFormat};
 use crate::vector::{RowLanes, Slot};
 use bytemuck::cast;
-use wide::{f32x8, f64x4, i8x32, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
+use wide::{f32x8, f64x4, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
 
 use super::LANES;
 
@@ -801,12 +801,28 @@ pub(super) fn rgba8(color: &[[f32; LANES]; 3], t: &[f32; LANES], background: Bac
     rgba8_lanes(color.map(f32x8::new), f32x8::new(*t), background)
 }
 
+/// Whether the build is x86 without SSSE3 (the x86-64 baseline, SSE2): no byte shuffle and no
+/// `pmulhrsw`, which `wide` would emulate lane by lane (195 instructions per pixel at M = 4);
+/// [`int8`] then has an SSE2 form of its own.
+macro_rules! sse2_only {
+    ($($item:item)*) => {
+        $(#[cfg(all(any(target_arch = "x86", target_arch = "x86_64"), not(target_feature = "ssse3")))] $item)*
+    };
+}
+macro_rules! not_sse2_only {
+    ($($item:item)*) => {
+        $(#[cfg(not(all(any(target_arch = "x86", target_arch = "x86_64"), not(target_feature = "ssse3"))))] $item)*
+    };
+}
+
+not_sse2_only! {
 /// The integer resolve (`crate::resolve::int`) in 16-bit lanes: four pixels per register,
 /// each pixel's four 16-bit slots `[R, G, B, T]` (its 8 bytes of a 128-bit half). Per layer,
 /// one shuffle, one shift, one `pmulhrsw`, one saturating add and one shuffle.
 mod int8 {
     use super::*;
     use crate::resolve::int;
+    use wide::i8x32;
 
     /// A zeroing shuffle index.
     const Z: i8 = -128;
@@ -835,7 +851,7 @@ mod int8 {
 
     /// Four rows (pixels) as the factors `[128 R, 128 G, 128 B, floor(257 T / 2)]`.
     #[inline(always)]
-    pub(super) fn factors(rows: [Row; 4]) -> i16x16 {
+    fn factors(rows: [Row; 4]) -> i16x16 {
         let x: i8x32 = cast(rows);
         let s: u16x16 = cast(x.swizzle_half(halves(ROW_SLOTS)));
         cast(s >> 1)
@@ -856,9 +872,13 @@ mod int8 {
     #[inline(always)]
     pub(super) fn resolve<const OPAQUE: bool>(
         m: usize,
-        layer_factors: impl Fn(usize) -> [i16x16; 2],
+        layer_rows: impl Fn(usize) -> [Row; LANES],
         bg: [u32; 3],
     ) -> [[u8; 4]; LANES] {
+        let layer_factors = |j: usize| {
+            let l = layer_rows(j);
+            [factors([l[0], l[1], l[2], l[3]]), factors([l[4], l[5], l[6], l[7]])]
+        };
         // Over an opaque background slot 3 (the visibility products, not read) starts at
         // 32767 and stays there (saturating adds of non-negative values): its byte is the
         // alpha 255.
@@ -899,23 +919,89 @@ mod int8 {
     }
 }
 
+}
+
+sse2_only! {
+/// The integer resolve (`crate::resolve::int`) on SSE2: two pixels per 128-bit register, each
+/// pixel's four 16-bit slots. The products are `q15(f, v) = mulhi(2 f, v) + (mullo(2 f, v) >> 15)`
+/// (`pmulhuw`, `pmullw`: `2 f v = 2 p`, whose high half is `p >> 15` and whose bit 15 is bit 14
+/// of `p`), from the doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]`, which one
+/// `punpcklbw` of the rows with their T bytes `& 0xfe` gives (`257 T & !1 = 2 floor(257 T / 2)`).
+mod int8 {
+    use super::*;
+    use crate::resolve::int;
+    use wide::{i16x8, u8x16, u16x8, u32x4};
+
+    /// `q15(f, v)` of the doubled factor `f2 = 2 f` and `v`, both in `0..=65535` and `0..=32767`.
+    #[inline(always)]
+    fn q15(f2: u16x8, v: u16x8) -> u16x8 {
+        f2.mul_keep_high(v) + ((f2 * v) >> 15)
+    }
+
+    /// Two rows (pixels) as the doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]`.
+    #[inline(always)]
+    fn factors(rows: [Row; 2]) -> u16x8 {
+        let w: [u32; 4] = cast(rows);
+        // The color words of both rows in the low 8 bytes (`pshufd`).
+        let x: u8x16 = cast(u32x4::new([w[0], w[2], w[1], w[3]]));
+        let t: u8x16 = x & cast::<u32x4, u8x16>(u32x4::splat(0xfe00_0000));
+        cast(u8x16::unpack_low(t, x))
+    }
+
+    /// One layer of two pixels: `acc += q15(f, v)` (saturating at 32767), then the new `v` in
+    /// every slot of the pixel (`pshuflw`, `pshufhw`).
+    #[inline(always)]
+    fn layer(acc: &mut i16x8, v: &mut u16x8, f2: u16x8) {
+        let p = q15(f2, *v);
+        *acc = acc.saturating_add(cast(p));
+        let a = p.to_array();
+        *v = u16x8::new([a[3], a[3], a[3], a[3], a[7], a[7], a[7], a[7]]);
+    }
+
+    /// The integer resolve of `m` layers of 8 pixels, as the SSSE3/AVX2 form computes it.
+    #[inline(always)]
+    pub(super) fn resolve<const OPAQUE: bool>(
+        m: usize,
+        layer_rows: impl Fn(usize) -> [Row; LANES],
+        bg: [u32; 3],
+    ) -> [[u8; 4]; LANES] {
+        let start = int::ACC_START as i16;
+        let alpha = if OPAQUE { int::ACC_MAX as i16 } else { start };
+        let mut acc = [i16x8::new(core::array::from_fn(|i| if i % 4 == 3 { alpha } else { start })); 4];
+        let mut v = [u16x8::splat(int::VIS_ONE as u16); 4];
+        for j in 0..m {
+            let l = layer_rows(j);
+            for k in 0..4 {
+                layer(&mut acc[k], &mut v[k], factors([l[2 * k], l[2 * k + 1]]));
+            }
+        }
+        let q: [i16x8; 4] = core::array::from_fn(|k| {
+            if OPAQUE {
+                let [r, g, b] = bg;
+                let bg2 = u16x8::new(core::array::from_fn(|i| (2 * [r, g, b, 0][i % 4]) as u16));
+                cast::<u16x8, i16x8>(cast::<i16x8, u16x8>(acc[k].saturating_add(cast(q15(bg2, v[k])))) >> 7)
+            } else {
+                let color = u16x8::new(core::array::from_fn(|i| if i % 4 == 3 { 0 } else { 0xffff }));
+                let a = q15(u16x8::splat(2 * 32640), u16x8::splat(int::VIS_ONE as u16) - v[k]);
+                let a = (a + u16x8::splat(64)) >> 7;
+                let c = cast::<i16x8, u16x8>(acc[k]) >> 7;
+                cast((c & color) | (a & !color))
+            }
+        });
+        let lo: [u32; 4] = cast(u8x16::narrow_i16x8(q[0], q[1]));
+        let hi: [u32; 4] = cast(u8x16::narrow_i16x8(q[2], q[3]));
+        core::array::from_fn(|p| if p < 4 { lo[p] } else { hi[p - 4] }.to_le_bytes())
+    }
+}
+}
+
 /// The integer RGBA8 resolve of an MLAB span (layer-major).
 #[inline(always)]
 pub(super) fn mlab_resolve_rgba8_int<const M: usize, const OPAQUE: bool>(
     span: &MlabSpan<M>,
     bg: [u32; 3],
 ) -> [[u8; 4]; LANES] {
-    int8::resolve::<OPAQUE>(
-        M,
-        |j| {
-            let l = span.get(j).copied().unwrap_or([Row::EMPTY; LANES]);
-            [
-                int8::factors([l[0], l[1], l[2], l[3]]),
-                int8::factors([l[4], l[5], l[6], l[7]]),
-            ]
-        },
-        bg,
-    )
+    int8::resolve::<OPAQUE>(M, |j| span.get(j).copied().unwrap_or([Row::EMPTY; LANES]), bg)
 }
 
 /// The integer RGBA8 resolve of 8 pixels stored pixel-major (`pixels[lane][layer]`).
@@ -926,10 +1012,7 @@ pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize, const OPAQUE: b
 ) -> [[u8; 4]; LANES] {
     int8::resolve::<OPAQUE>(
         M,
-        |j| {
-            let r = |p: usize| pixels[p].get(j).copied().unwrap_or(Row::EMPTY);
-            [int8::factors([r(0), r(1), r(2), r(3)]), int8::factors([r(4), r(5), r(6), r(7)])]
-        },
+        |j| core::array::from_fn(|p| pixels[p].get(j).copied().unwrap_or(Row::EMPTY)),
         bg,
     )
 }
