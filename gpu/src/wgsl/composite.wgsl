@@ -1,0 +1,37 @@
+// The compositor's entry point (mlab_gpu::Compositor): one invocation per stored pixel, which
+// inserts its fragments in submission order (the CPU sorted them by pixel, stably) and writes its
+// slots. Bindings (group 0):
+//   0 uniform          CompositeParams
+//   1 storage, read    offsets: array<u32>, pixels + 1 entries; pixel p's fragments are
+//                      offsets[p] .. offsets[p + 1]
+//   2 storage, read    fragments: array<u32>, 5 words per fragment: bits of premultiplied
+//                      R, G, B, alpha, depth (f32)
+//   3 storage, rw      rows: array<vec2<u32>>, the framebuffer's storage (Row::words)
+struct CompositeParams {
+    // Stored pixels in this dispatch (padding lanes of spans included).
+    pixels: u32,
+    // Invocations per row of the 2-D dispatch (workgroups in x times 64).
+    pitch: u32,
+    // 1: 8-pixel layer-major spans (mlab::Spans); 0: pixel-major (mlab::PixelMajor).
+    spans: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<uniform> composite_params: CompositeParams;
+@group(0) @binding(1) var<storage, read> composite_offsets: array<u32>;
+@group(0) @binding(2) var<storage, read> composite_fragments: array<u32>;
+@group(0) @binding(3) var<storage, read_write> composite_rows: array<vec2<u32>>;
+
+// Index of slot j (of `slots` per pixel) of stored pixel p.
+fn composite_slot(p: u32, j: u32, slots: u32) -> u32 {
+    if (composite_params.spans != 0u) {
+        return ((p >> 3u) * slots + j) * 8u + (p & 7u);
+    }
+    return p * slots + j;
+}
+
+fn composite_row(i: u32) -> vec2<u32> {
+    let k = 5u * i;
+    let c = vec3<u32>(composite_fragments[k], composite_fragments[k + 1u], composite_fragments[k + 2u]);
+    return mlab_quantize(c, composite_fragments[k + 3u], composite_fragments[k + 4u]);
+}
