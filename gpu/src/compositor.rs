@@ -82,6 +82,9 @@ impl Gpu {
 
 /// Bytes per fragment on the GPU: the bits of R, G, B, alpha, depth.
 const FRAGMENT_BYTES: u64 = 20;
+/// Fragments per pixel per dispatch (`COMPOSITE_CHUNK` in `composite.wgsl`: lavapipe ends an
+/// invocation's loops after 65,535 iterations in all).
+const CHUNK: u32 = 32768;
 /// Invocations per workgroup (`@workgroup_size(64)` in `composite.wgsl`).
 const WORKGROUP: u32 = 64;
 /// The most bytes one storage binding may hold: WebGPU's default
@@ -108,7 +111,7 @@ struct Params {
     pixels: u32,
     pitch: u32,
     spans: u32,
-    pad: u32,
+    first: u32,
 }
 
 impl Compositor {
@@ -250,11 +253,14 @@ impl Compositor {
         let groups = pixels.div_ceil(WORKGROUP);
         let gx = groups.clamp(1, self.max_groups);
         let gy = groups.div_ceil(gx).max(1);
-        let params = Params {
+        // Dispatches: one per CHUNK fragments of the most crowded pixel.
+        let most = offsets.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+        let passes = most.div_ceil(CHUNK).max(1);
+        let params = |pass: u32| Params {
             pixels,
             pitch: gx * WORKGROUP,
             spans: u32::from(self.layout == Layout::Spans),
-            pad: 0,
+            first: pass * CHUNK,
         };
         let out_bytes = u64::from(pixels) * slots(self.layers) as u64 * 8;
         // A binding may not be empty: a band without fragments binds one unused fragment.
@@ -268,7 +274,6 @@ impl Compositor {
                     usage,
                 })
             };
-            let params = init("params", bytemuck::bytes_of(&params), wgpu::BufferUsages::UNIFORM);
             let offsets = init("offsets", bytemuck::cast_slice(offsets), wgpu::BufferUsages::STORAGE);
             let fragments = init("fragments", bytemuck::cast_slice(fragments), wgpu::BufferUsages::STORAGE);
             let rows = device.create_buffer(&wgpu::BufferDescriptor {
@@ -283,30 +288,23 @@ impl Compositor {
                 usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("mlab-gpu composite"),
-                layout: &self.pipeline.get_bind_group_layout(0),
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: params.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: offsets.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: fragments.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: rows.as_entire_binding(),
-                    },
-                ],
-            });
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            {
+            for pass in 0..passes {
+                let params = init("params", bytemuck::bytes_of(&params(pass)), wgpu::BufferUsages::UNIFORM);
+                let entries = [&params, &offsets, &fragments, &rows];
+                let entries: Vec<wgpu::BindGroupEntry> = (0u32..)
+                    .zip(entries)
+                    .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                        binding,
+                        resource: buffer.as_entire_binding(),
+                    })
+                    .collect();
+                let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("mlab-gpu composite"),
+                    layout: &self.pipeline.get_bind_group_layout(0),
+                    entries: &entries,
+                });
+                // One compute pass per dispatch: a later one reads the rows the earlier stored.
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("mlab-gpu composite"),
                     timestamp_writes: None,

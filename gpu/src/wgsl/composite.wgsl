@@ -14,8 +14,17 @@ struct CompositeParams {
     pitch: u32,
     // 1: 8-pixel layer-major spans (mlab::Spans); 0: pixel-major (mlab::PixelMajor).
     spans: u32,
-    pad: u32,
+    // This dispatch inserts fragments first .. first + COMPOSITE_CHUNK of each pixel; 0 starts
+    // from empty rows, later dispatches load the rows the previous one stored.
+    first: u32,
 }
+
+// Fragments per pixel per dispatch. Mesa's llvmpipe (lavapipe) ends an invocation's loops after
+// 65,535 iterations in all (gallivm's loop limiter, one counter per shader function, a guard
+// against endless shaders): a pixel with more fragments would silently lose the rest. A pixel
+// with more than COMPOSITE_CHUNK fragments is continued by further dispatches (`first`), which
+// load its rows back; this also bounds the run time of one invocation (GPU watchdogs).
+const COMPOSITE_CHUNK: u32 = 32768u;
 
 @group(0) @binding(0) var<uniform> composite_params: CompositeParams;
 @group(0) @binding(1) var<storage, read> composite_offsets: array<u32>;

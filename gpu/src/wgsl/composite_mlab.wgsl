@@ -5,12 +5,16 @@ fn composite(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (p >= composite_params.pixels) {
         return;
     }
+    let start = composite_offsets[p] + composite_params.first;
+    let end = min(composite_offsets[p + 1u], start + COMPOSITE_CHUNK);
+    if (composite_params.first != 0u && start >= end) {
+        return; // this pixel had no more than `first` fragments: its rows are final
+    }
     var b: array<vec2<u32>, MLAB_M>;
     for (var j = 0u; j < MLAB_M; j++) {
-        b[j] = MLAB_EMPTY_ROW;
+        b[j] = select(composite_rows[composite_slot(p, j, MLAB_M)], MLAB_EMPTY_ROW, composite_params.first == 0u);
     }
-    let end = composite_offsets[p + 1u];
-    for (var i = composite_offsets[p]; i < end; i++) {
+    for (var i = start; i < end; i++) {
         mlab_insert(&b, composite_row(i));
     }
     for (var j = 0u; j < MLAB_M; j++) {
