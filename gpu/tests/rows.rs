@@ -6,7 +6,7 @@ mod common;
 
 use common::{Rng, gpu};
 use mlab::{FragmentError, Layers};
-use mlab_gpu::{Arith, Compositor, Gpu, GpuError, GpuFragment, Layout, cpu, wgsl};
+use mlab_gpu::{Arith, Compositor, GpuError, GpuFragment, Layout, cpu, wgsl};
 
 fn all_layers() -> impl Iterator<Item = Layers> {
     Layers::SIZES
@@ -258,8 +258,6 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
     assert!(pollster::block_on(scope.pop()).is_none());
 }
 
-#[allow(dead_code)]
-fn _uses(_: &Gpu) {}
 
 #[test]
 fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
@@ -273,6 +271,30 @@ fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
         for arith in Arith::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::PixelMajor).expect("compositor");
             check(&c, layers, arith, Layout::PixelMajor, 3, 2, &frags);
+        }
+    }
+}
+
+#[path = "../../examples/common/raster.rs"]
+mod raster;
+
+#[test]
+fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
+    let Some(gpu) = gpu("torus") else { return };
+    let (w, h) = (160, 120);
+    let mut frags = Vec::new();
+    for t in &raster::scene(w, h, 48, 24) {
+        raster::rasterize(t, w, h, |x, y, z| {
+            let f = mlab::Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z).expect("valid");
+            let c = f.color();
+            frags.push(GpuFragment { pixel: y * w + x, rgba: [c.x, c.y, c.z, f.alpha()], depth: z });
+        });
+    }
+    assert!(frags.len() > 10_000);
+    for layers in [Layers::Mlab(2), Layers::Mlab(4), Layers::Hybrid(3)] {
+        for arith in Arith::ALL {
+            let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
+            check(&c, layers, arith, Layout::Spans, w, h, &frags);
         }
     }
 }
