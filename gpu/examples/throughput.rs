@@ -51,7 +51,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     let gpu = Gpu::new()?;
     let info = gpu.adapter_info();
-    println!("adapter: {} / {} / {} ({:?})", info.name, info.driver, info.driver_info, info.backend);
+    println!(
+        "adapter: {} / {} / {} ({:?})",
+        info.name, info.driver, info.driver_info, info.backend
+    );
     println!("{n} fragments on {w}x{h}, {layers:?}");
     for arith in Arith::ALL {
         let c = Compositor::new(&gpu, layers, arith, Layout::Spans)?;

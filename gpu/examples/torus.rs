@@ -38,7 +38,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         raster::rasterize(t, W, H, |x, y, z| {
             if let Ok(f) = Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z) {
                 let c = f.color();
-                fragments.push(GpuFragment { pixel: y * W + x, rgba: [c.x, c.y, c.z, f.alpha()], depth: z });
+                fragments.push(GpuFragment {
+                    pixel: y * W + x,
+                    rgba: [c.x, c.y, c.z, f.alpha()],
+                    depth: z,
+                });
             }
         });
     }
@@ -57,7 +61,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         info.name,
         info.driver_info,
         fragments.len(),
-        if words == cpu_words { "identical to" } else { "DIFFERENT from" },
+        if words == cpu_words {
+            "identical to"
+        } else {
+            "DIFFERENT from"
+        },
         if image == cpu_image { "identical" } else { "DIFFERENT" },
     );
 

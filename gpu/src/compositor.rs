@@ -91,6 +91,13 @@ const WORKGROUP: u32 = 64;
 /// `maxStorageBufferBindingSize` (128 MiB).
 const DEFAULT_BINDING_BYTES: u64 = 128 << 20;
 
+/// 128 MiB, or less where the device's storage binding or buffer size limit is lower.
+fn binding_limit(limits: &wgpu::Limits) -> u64 {
+    DEFAULT_BINDING_BYTES
+        .min(limits.max_storage_buffer_binding_size)
+        .min(limits.max_buffer_size)
+}
+
 /// The compute pipeline of one method, size and arithmetic (the text of [`wgsl::compositor`]).
 #[derive(Debug)]
 pub struct Compositor {
@@ -145,9 +152,7 @@ impl Compositor {
             layers,
             layout,
             source,
-            max_binding: DEFAULT_BINDING_BYTES
-                .min(u64::from(limits.max_storage_buffer_binding_size))
-                .min(limits.max_buffer_size),
+            max_binding: binding_limit(&limits),
             max_groups: limits.max_compute_workgroups_per_dimension,
         })
     }
@@ -167,11 +172,7 @@ impl Compositor {
     /// A lower binding limit (at least 1 KiB; never above the device's): smaller bands, less
     /// memory at a time. For tests of the band split, and for sharing a small GPU.
     pub fn set_max_binding_bytes(&mut self, bytes: u64) {
-        let limits = self.device.limits();
-        let device_max = DEFAULT_BINDING_BYTES
-            .min(u64::from(limits.max_storage_buffer_binding_size))
-            .min(limits.max_buffer_size);
-        self.max_binding = bytes.clamp(1024, device_max);
+        self.max_binding = bytes.clamp(1024, binding_limit(&self.device.limits()));
     }
 
     /// Composites `fragments` (in submission order) into a cleared `width x height`
@@ -265,7 +266,11 @@ impl Compositor {
         let out_bytes = u64::from(pixels) * slots(self.layers) as u64 * 8;
         // A binding may not be empty: a band without fragments binds one unused fragment.
         let placeholder = [0u32; 5];
-        let fragments = if fragments.is_empty() { &placeholder[..] } else { fragments };
+        let fragments = if fragments.is_empty() {
+            &placeholder[..]
+        } else {
+            fragments
+        };
         let make = || {
             let init = |label, contents: &[u8], usage| {
                 device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -275,7 +280,11 @@ impl Compositor {
                 })
             };
             let offsets = init("offsets", bytemuck::cast_slice(offsets), wgpu::BufferUsages::STORAGE);
-            let fragments = init("fragments", bytemuck::cast_slice(fragments), wgpu::BufferUsages::STORAGE);
+            let fragments = init(
+                "fragments",
+                bytemuck::cast_slice(fragments),
+                wgpu::BufferUsages::STORAGE,
+            );
             let rows = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("rows"),
                 size: out_bytes,

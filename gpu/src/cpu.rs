@@ -49,7 +49,9 @@ fn composite_in<A: Arithmetic>(
     fragments: &[GpuFragment],
 ) -> Result<Vec<u32>, GpuError> {
     let err = |e| framebuffer_error(layers, width, height, e);
-    let pixels = width.checked_mul(height).ok_or(GpuError::FrameTooLarge { width, height })?;
+    let pixels = width
+        .checked_mul(height)
+        .ok_or(GpuError::FrameTooLarge { width, height })?;
     let mut storage = vec![Row::EMPTY; layers.rows_needed(width, height).map_err(err)?];
     let mut fb = DynFramebuffer::<A>::new_cleared(layers, &mut storage, width, height).map_err(err)?;
     for (index, f) in fragments.iter().enumerate() {

@@ -40,13 +40,21 @@ fn dither(numerator: u32) -> f32 {
 }
 
 /// The kernel's step (`quantize`, `quantize_with_dither`: multiply, then add, then truncate).
-#[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "the kernel's cast")]
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "the kernel's cast"
+)]
 fn separate(v: f32, u: f32) -> u8 {
     (v * 255.0 + u) as u8
 }
 
 /// The same with one rounding.
-#[expect(clippy::cast_possible_truncation, clippy::cast_sign_loss, reason = "the kernel's cast")]
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "the kernel's cast"
+)]
 fn fused(v: f32, u: f32) -> u8 {
     v.mul_add(255.0, u) as u8
 }
@@ -68,7 +76,13 @@ fn critical_pairs() -> &'static [(u32, u32)] {
         let end = 1.0f32.to_bits() + 1;
         let half = end / 2;
         std::thread::scope(|s| {
-            let scan = |a: u32, b: u32| move || (a..b).filter_map(|bits| window(f32::from_bits(bits)).map(|n| (bits, n))).collect::<Vec<_>>();
+            let scan = |a: u32, b: u32| {
+                move || {
+                    (a..b)
+                        .filter_map(|bits| window(f32::from_bits(bits)).map(|n| (bits, n)))
+                        .collect::<Vec<_>>()
+                }
+            };
             let first = s.spawn(scan(0, half));
             let mut pairs = scan(half, end)();
             let mut all = first.join().expect("scan thread");
@@ -96,10 +110,17 @@ fn a_fused_multiply_add_changes_bytes_of_faint_fragments_only() {
         differ.len()
     );
     for (v, u, s, f) in &differ {
-        println!("  v = {v:e} ({:#010x}), u = {u} (h = {}): separate {s}, fused {f}", v.to_bits(), (u * 256.0) as u32);
+        println!(
+            "  v = {v:e} ({:#010x}), u = {u} (h = {}): separate {s}, fused {f}",
+            v.to_bits(),
+            (u * 256.0) as u32
+        );
     }
     // The finding: a contracted FMA does change bytes, so the shader must not use f32.
-    assert!(!differ.is_empty(), "no byte changes: the shader could use f32 arithmetic");
+    assert!(
+        !differ.is_empty(),
+        "no byte changes: the shader could use f32 arithmetic"
+    );
     for &(v, u, s, f) in &differ {
         // Never with u = 0.5 (the paper's rounding, every fragment that is not faint) ...
         assert_ne!(u, 0.5);
@@ -165,9 +186,18 @@ fn test_index(gid: vec3<u32>) -> u32 { return gid.y * test_n.y + gid.x; }
     let groups = items.div_ceil(64);
     let gx = groups.min(65535);
     let gy = groups.div_ceil(gx);
-    let buf = |contents: &[u8], usage| device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: None, contents, usage });
+    let buf = |contents: &[u8], usage| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: None,
+            contents,
+            usage,
+        })
+    };
     let input = buf(bytemuck::cast_slice(input), wgpu::BufferUsages::STORAGE);
-    let n = buf(bytemuck::cast_slice(&[items, gx * 64, 0, 0]), wgpu::BufferUsages::UNIFORM);
+    let n = buf(
+        bytemuck::cast_slice(&[items, gx * 64, 0, 0]),
+        wgpu::BufferUsages::UNIFORM,
+    );
     let size = u64::from(items) * 4;
     let out = device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
@@ -185,9 +215,18 @@ fn test_index(gid: vec3<u32>) -> u32 { return gid.y * test_n.y + gid.x; }
         label: None,
         layout: &pipeline.get_bind_group_layout(0),
         entries: &[
-            wgpu::BindGroupEntry { binding: 0, resource: input.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 1, resource: out.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: 2, resource: n.as_entire_binding() },
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: input.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: out.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: n.as_entire_binding(),
+            },
         ],
     });
     let mut encoder = device.create_command_encoder(&Default::default());
@@ -202,7 +241,9 @@ fn test_index(gid: vec3<u32>) -> u32 { return gid.y * test_n.y + gid.x; }
     back.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("map"));
     device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
     let view = back.slice(..).get_mapped_range().expect("mapped");
-    view.chunks_exact(4).map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
+    view.chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
 }
 
 fn compare(what: &str, got: &[u32], want: &[u32], input: impl Fn(usize) -> String) {
@@ -220,16 +261,28 @@ fn the_shader_quantizes_exactly_as_the_kernel_on_the_critical_pairs_and_a_sample
     let Some(gpu) = common::gpu("quantize") else { return };
     // Every critical pair, both signs of zero, and every dither for a sample of v.
     let mut pairs: Vec<(u32, u32)> = critical_pairs().to_vec();
-    pairs.extend((0..=1.0f32.to_bits()).step_by(65_537).chain([0x8000_0000]).flat_map(|b| numerators().map(move |n| (b, n))));
+    pairs.extend(
+        (0..=1.0f32.to_bits())
+            .step_by(65_537)
+            .chain([0x8000_0000])
+            .flat_map(|b| numerators().map(move |n| (b, n))),
+    );
     let input: Vec<u32> = pairs.iter().flat_map(|&(v, n)| [v, dither(n).to_bits()]).collect();
-    let want: Vec<u32> = pairs.iter().map(|&(v, n)| u32::from(separate(f32::from_bits(v), dither(n)))).collect();
+    let want: Vec<u32> = pairs
+        .iter()
+        .map(|&(v, n)| u32::from(separate(f32::from_bits(v), dither(n))))
+        .collect();
     let got = run(&gpu, "quantize", &input, pairs.len() as u32);
-    compare("quantize", &got, &want, |i| format!("v {:#x} U {}", pairs[i].0, pairs[i].1));
+    compare("quantize", &got, &want, |i| {
+        format!("v {:#x} U {}", pairs[i].0, pairs[i].1)
+    });
 }
 
 #[test]
 fn the_shader_multiplies_by_255_and_adds_as_the_cpu_rounds() {
-    let Some(gpu) = common::gpu("f32 emulation") else { return };
+    let Some(gpu) = common::gpu("f32 emulation") else {
+        return;
+    };
     // v * 255 for every 61st f32 in [0, 1] and every subnormal of a range, then v + w for
     // pairs of non-negative f32 of every magnitude (subnormal, tiny, large, equal exponents).
     let vs: Vec<u32> = (0..=1.0f32.to_bits()).step_by(61).chain(0..0x1_0000).collect();
@@ -243,7 +296,7 @@ fn the_shader_multiplies_by_255_and_adds_as_the_cpu_rounds() {
         let b = match rng.below(3) {
             0 => (rng.next() as u32) & 0x7fff_ffff,
             1 => (a & 0xff80_0000) | (rng.next() as u32 & 0x007f_ffff), // same exponent
-            _ => a.saturating_sub(rng.below(30 << 23)),                   // exponents close
+            _ => a.saturating_sub(rng.below(30 << 23)),                 // exponents close
         };
         let s = f32::from_bits(a) + f32::from_bits(b);
         if f32::from_bits(a).is_finite() && f32::from_bits(b).is_finite() && s.is_finite() {
@@ -251,7 +304,12 @@ fn the_shader_multiplies_by_255_and_adds_as_the_cpu_rounds() {
         }
     }
     let input: Vec<u32> = pairs.iter().flatten().copied().collect();
-    let want: Vec<u32> = pairs.iter().map(|&[a, b]| (f32::from_bits(a) + f32::from_bits(b)).to_bits()).collect();
+    let want: Vec<u32> = pairs
+        .iter()
+        .map(|&[a, b]| (f32::from_bits(a) + f32::from_bits(b)).to_bits())
+        .collect();
     let got = run(&gpu, "add", &input, pairs.len() as u32);
-    compare("add", &got, &want, |i| format!("{:#x} + {:#x}", pairs[i][0], pairs[i][1]));
+    compare("add", &got, &want, |i| {
+        format!("{:#x} + {:#x}", pairs[i][0], pairs[i][1])
+    });
 }

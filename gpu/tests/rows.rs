@@ -34,10 +34,12 @@ fn check(c: &Compositor, layers: Layers, arith: Arith, layout: Layout, w: u32, h
 }
 
 fn random_stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<GpuFragment> {
-    (0..n).map(|_| {
-        let p = rng.below(w * h);
-        rng.fragment(p)
-    }).collect()
+    (0..n)
+        .map(|_| {
+            let p = rng.below(w * h);
+            rng.fragment(p)
+        })
+        .collect()
 }
 
 #[test]
@@ -48,7 +50,11 @@ fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
     for layers in all_layers() {
         for arith in Arith::ALL {
             // Spans (the DynFramebuffer's storage) for every size, pixel-major for every other.
-            let layout = if total % 3 == 0 { Layout::PixelMajor } else { Layout::Spans };
+            let layout = if total.is_multiple_of(3) {
+                Layout::PixelMajor
+            } else {
+                Layout::Spans
+            };
             let c = Compositor::new(&gpu, layers, arith, layout).expect("compositor");
             for (w, h, n) in [(37, 23, 24_000), (8, 1, 3_000), (1, 1, 600), (64, 20, 9_000)] {
                 let frags = random_stream(&mut rng, w, h, n);
@@ -105,22 +111,34 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Opaque fragments in random order (a z-buffer), and coplanar opaque ones.
-    streams.push((0..10_000).map(|_| {
-        let mut f = rng.fragment_in(n);
-        f.rgba[3] = 1.0;
-        f
-    }).collect());
-    streams.push((0..10_000).map(|_| {
-        let mut f = rng.fragment_in(n);
-        f.depth = 1.0;
-        f
-    }).collect());
+    streams.push(
+        (0..10_000)
+            .map(|_| {
+                let mut f = rng.fragment_in(n);
+                f.rgba[3] = 1.0;
+                f
+            })
+            .collect(),
+    );
+    streams.push(
+        (0..10_000)
+            .map(|_| {
+                let mut f = rng.fragment_in(n);
+                f.depth = 1.0;
+                f
+            })
+            .collect(),
+    );
     // Equal depths, -0 against +0, extremes of f32, subnormal depths.
-    streams.push((0..10_000).map(|i| {
-        let mut f = rng.fragment_in(n);
-        f.depth = [0.0, -0.0, 1e-45, -1e-45, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 3.0][i % 8];
-        f
-    }).collect());
+    streams.push(
+        (0..10_000)
+            .map(|i| {
+                let mut f = rng.fragment_in(n);
+                f.depth = [0.0, -0.0, 1e-45, -1e-45, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 3.0][i % 8];
+                f
+            })
+            .collect(),
+    );
     // Saturating tails: thousands of bright fragments into a few pixels.
     streams.push(
         (0..30_000u32)
@@ -132,14 +150,18 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Additive light only (alpha 0) and invisible fragments (nothing at all).
-    streams.push((0..10_000).map(|i| {
-        let mut f = rng.fragment_in(n);
-        f.rgba[3] = 0.0;
-        if i % 2 == 0 {
-            f.rgba = [0.0, 0.0, 0.0, 0.0];
-        }
-        f
-    }).collect());
+    streams.push(
+        (0..10_000)
+            .map(|i| {
+                let mut f = rng.fragment_in(n);
+                f.rgba[3] = 0.0;
+                if i % 2 == 0 {
+                    f.rgba = [0.0, 0.0, 0.0, 0.0];
+                }
+                f
+            })
+            .collect(),
+    );
     streams
 }
 
@@ -150,7 +172,11 @@ fn adversarial_streams_match_the_cpu() {
     let (w, h) = (13, 3);
     let streams = adversarial(&mut rng, w, h);
     let mut total = 0;
-    for layers in [1, 2, 3, 4, 6, 8].map(Layers::Mlab).into_iter().chain([1, 3, 7].map(Layers::Hybrid)) {
+    for layers in [1, 2, 3, 4, 6, 8]
+        .map(Layers::Mlab)
+        .into_iter()
+        .chain([1, 3, 7].map(Layers::Hybrid))
+    {
         for arith in Arith::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
             for s in &streams {
@@ -164,10 +190,16 @@ fn adversarial_streams_match_the_cpu() {
 
 #[test]
 fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
-    let Some(gpu) = gpu("paper_tail_saturation") else { return };
+    let Some(gpu) = gpu("paper_tail_saturation") else {
+        return;
+    };
     // 70 000 opaque fragments into one pixel: PaperTail's 16-bit count and alpha saturate.
     let frags: Vec<GpuFragment> = (0..70_000u32)
-        .map(|i| GpuFragment { pixel: 0, rgba: [0.2, 0.1, 1.0, 1.0], depth: (i % 5000) as f32 + 1.0 })
+        .map(|i| GpuFragment {
+            pixel: 0,
+            rgba: [0.2, 0.1, 1.0, 1.0],
+            depth: (i % 5000) as f32 + 1.0,
+        })
         .collect();
     for arith in Arith::ALL {
         let c = Compositor::new(&gpu, Layers::Hybrid(1), arith, Layout::PixelMajor).expect("compositor");
@@ -196,7 +228,10 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
         check(&c, Layers::Hybrid(3), Arith::Unbiased, layout, w, h, &frags);
         // One line with more fragments than a binding holds is a typed error.
         let crowded: Vec<GpuFragment> = (0..1000).map(|_| rng.fragment(0)).collect();
-        assert!(matches!(c.composite(w, h, &crowded), Err(GpuError::LineTooLarge { y: 0, .. })));
+        assert!(matches!(
+            c.composite(w, h, &crowded),
+            Err(GpuError::LineTooLarge { y: 0, .. })
+        ));
     }
 }
 
@@ -204,30 +239,71 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
 fn bad_input_is_a_typed_error_not_a_panic() {
     let Some(gpu) = gpu("errors") else { return };
     let c = Compositor::new(&gpu, Layers::Mlab(2), Arith::Paper, Layout::Spans).expect("compositor");
-    let ok = GpuFragment { pixel: 0, rgba: [0.1, 0.1, 0.1, 0.5], depth: 1.0 };
+    let ok = GpuFragment {
+        pixel: 0,
+        rgba: [0.1, 0.1, 0.1, 0.5],
+        depth: 1.0,
+    };
     let bad = |f: GpuFragment| c.composite(4, 4, &[ok, f]);
     assert_eq!(
         bad(GpuFragment { pixel: 16, ..ok }),
-        Err(GpuError::PixelOutOfRange { index: 1, pixel: 16, pixels: 16 })
+        Err(GpuError::PixelOutOfRange {
+            index: 1,
+            pixel: 16,
+            pixels: 16
+        })
     );
     for (f, e) in [
         (GpuFragment { depth: f32::NAN, ..ok }, FragmentError::NanDepth),
-        (GpuFragment { depth: f32::INFINITY, ..ok }, FragmentError::InfiniteDepth),
-        (GpuFragment { rgba: [0.1, 0.1, 0.1, 1.5], ..ok }, FragmentError::AlphaOutOfRange),
-        (GpuFragment { rgba: [-0.1, 0.1, 0.1, 0.5], ..ok }, FragmentError::NegativeColor),
-        (GpuFragment { rgba: [1.1, 0.1, 0.1, 0.5], ..ok }, FragmentError::ColorAboveOne),
+        (
+            GpuFragment {
+                depth: f32::INFINITY,
+                ..ok
+            },
+            FragmentError::InfiniteDepth,
+        ),
+        (
+            GpuFragment {
+                rgba: [0.1, 0.1, 0.1, 1.5],
+                ..ok
+            },
+            FragmentError::AlphaOutOfRange,
+        ),
+        (
+            GpuFragment {
+                rgba: [-0.1, 0.1, 0.1, 0.5],
+                ..ok
+            },
+            FragmentError::NegativeColor,
+        ),
+        (
+            GpuFragment {
+                rgba: [1.1, 0.1, 0.1, 0.5],
+                ..ok
+            },
+            FragmentError::ColorAboveOne,
+        ),
     ] {
         assert_eq!(bad(f), Err(GpuError::Fragment { index: 1, error: e }));
     }
-    assert!(matches!(c.composite(u32::MAX, 2, &[]), Err(GpuError::FrameTooLarge { .. })));
+    assert!(matches!(
+        c.composite(u32::MAX, 2, &[]),
+        Err(GpuError::FrameTooLarge { .. })
+    ));
     assert!(matches!(
         Compositor::new(&gpu, Layers::Mlab(9), Arith::Paper, Layout::Spans),
         Err(GpuError::UnsupportedLayers(Layers::Mlab(9)))
     ));
-    assert!(matches!(wgsl::hybrid(0, Arith::Paper), Err(GpuError::UnsupportedLayers(_))));
+    assert!(matches!(
+        wgsl::hybrid(0, Arith::Paper),
+        Err(GpuError::UnsupportedLayers(_))
+    ));
     // Empty frames and empty streams are fine: cleared storage.
     assert_eq!(c.composite(0, 0, &[]), Ok(vec![]));
-    assert_eq!(c.composite(3, 1, &[]).expect("empty"), cpu::composite(Layers::Mlab(2), Arith::Paper, Layout::Spans, 3, 1, &[]).expect("cpu"));
+    assert_eq!(
+        c.composite(3, 1, &[]).expect("empty"),
+        cpu::composite(Layers::Mlab(2), Arith::Paper, Layout::Spans, 3, 1, &[]).expect("cpu")
+    );
 }
 
 #[test]
@@ -250,14 +326,13 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
     let device = gpu.device();
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
     for src in [wgsl::mlab(8, Arith::Unbiased), wgsl::hybrid(1, Arith::Paper)] {
-        device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        let _module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: None,
             source: wgpu::ShaderSource::Wgsl(src.expect("text").into()),
         });
     }
     assert!(pollster::block_on(scope.pop()).is_none());
 }
-
 
 #[test]
 fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
@@ -287,7 +362,11 @@ fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
         raster::rasterize(t, w, h, |x, y, z| {
             let f = mlab::Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z).expect("valid");
             let c = f.color();
-            frags.push(GpuFragment { pixel: y * w + x, rgba: [c.x, c.y, c.z, f.alpha()], depth: z });
+            frags.push(GpuFragment {
+                pixel: y * w + x,
+                rgba: [c.x, c.y, c.z, f.alpha()],
+                depth: z,
+            });
         });
     }
     assert!(frags.len() > 10_000);

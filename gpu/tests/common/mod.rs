@@ -32,7 +32,7 @@ impl Rng {
     }
 
     pub fn below(&mut self, n: u32) -> u32 {
-        ((self.next() >> 32) * u64::from(n) >> 32) as u32
+        (((self.next() >> 32) * u64::from(n)) >> 32) as u32
     }
 
     /// Uniform in [0, 1) with 24 bits.
@@ -44,7 +44,7 @@ impl Rng {
     /// subnormal values, 0, -0 and 1, and any f32 bit pattern in [0, 1].
     pub fn value(&mut self) -> f32 {
         match self.below(8) {
-            0 | 1 | 2 => self.unit(),
+            0..=2 => self.unit(),
             3 => self.below(256) as f32 / 255.0,
             4 => self.unit() * 1e-3,
             5 => f32::from_bits(self.below(0x0080_0000)), // subnormal
