@@ -195,6 +195,16 @@ impl Compositor {
         if stored >= u32::MAX / 8 {
             return Err(too_large);
         }
+        if u32::try_from(fragments.len()).is_err() {
+            return Err(GpuError::TooManyFragments { count: fragments.len() });
+        }
+        if stored == 0 {
+            // Nothing stored; still every fragment must be valid (none can be: no pixel).
+            return match fragments.first() {
+                Some(f) => validate(0, f, 0).map(|_| Vec::new()),
+                None => Ok(Vec::new()),
+            };
+        }
         // Stable counting sort by stored pixel, after validation.
         let mut offsets = vec![0u32; stored as usize + 1];
         let mut keys = Vec::with_capacity(fragments.len());

@@ -32,6 +32,11 @@ pub enum GpuError {
         /// The binding limit in bytes.
         limit: u64,
     },
+    /// More fragments than 32-bit offsets can count.
+    TooManyFragments {
+        /// How many were given.
+        count: usize,
+    },
     /// Fragment `index` names a pixel outside the frame.
     PixelOutOfRange {
         /// Position of the fragment in the input.
@@ -65,6 +70,7 @@ impl core::fmt::Display for GpuError {
             GpuError::LineTooLarge { y, bytes, limit } => {
                 write!(f, "line {y} needs {bytes} bytes in one binding, limit {limit}")
             }
+            GpuError::TooManyFragments { count } => write!(f, "{count} fragments: at most 2^32 - 1"),
             GpuError::PixelOutOfRange { index, pixel, pixels } => {
                 write!(f, "fragment {index}: pixel {pixel} outside the frame ({pixels} pixels)")
             }

@@ -300,6 +300,11 @@ fn bad_input_is_a_typed_error_not_a_panic() {
     ));
     // Empty frames and empty streams are fine: cleared storage.
     assert_eq!(c.composite(0, 0, &[]), Ok(vec![]));
+    assert_eq!(c.composite(0, 5, &[]), Ok(vec![]));
+    assert!(matches!(
+        c.composite(0, 5, &[ok]),
+        Err(GpuError::PixelOutOfRange { index: 0, .. })
+    ));
     assert_eq!(
         c.composite(3, 1, &[]).expect("empty"),
         cpu::composite(Layers::Mlab(2), Arith::Paper, Layout::Spans, 3, 1, &[]).expect("cpu")
