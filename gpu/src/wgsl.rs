@@ -15,11 +15,11 @@
 //! | text | what | uses |
 //! |---|---|---|
 //! | [`KERNEL`] | quantization (both arithmetics), both merges, both tail adds, the depth test | nothing |
-//! | [`mlab`] | [`KERNEL`], a header for `M` and the arithmetic, `mlab_insert` (Listing 1) | |
-//! | [`hybrid`] | [`KERNEL`], a header for `K` and the arithmetic, `ht_insert` (Listing 2) | |
-//! | [`compositor`] | [`mlab`] or [`hybrid`] followed by the compositor's entry point and bindings | [`crate::Compositor`] |
+//! | [`mlab()`] | [`KERNEL`], a header for `M` and the arithmetic, `mlab_insert` (Listing 1) | |
+//! | [`hybrid()`] | [`KERNEL`], a header for `K` and the arithmetic, `ht_insert` (Listing 2) | |
+//! | [`compositor()`] | [`mlab()`] or [`hybrid()`] followed by the compositor's entry point and bindings | [`crate::Compositor`] |
 //!
-//! A shader includes [`mlab`] (or [`hybrid`]) and calls, per fragment:
+//! A shader includes [`mlab()`] (or [`hybrid()`]) and calls, per fragment:
 //!
 //! ```wgsl
 //! var rows: array<vec2<u32>, MLAB_M>;           // the pixel's rows, loaded from storage
@@ -39,13 +39,13 @@ use mlab::Layers;
 /// `mlab_merge_unbiased`) and tail adds (`mlab_tail_add_paper`, `mlab_tail_add_wide`).
 pub const KERNEL: &str = include_str!("wgsl/kernel.wgsl");
 
-/// Listing 1 (`mlab_insert`); needs `MLAB_M`, `mlab_merge` and [`KERNEL`] ([`mlab`] has them all).
+/// Listing 1 (`mlab_insert`); needs `MLAB_M`, `mlab_merge` and [`KERNEL`] ([`mlab()`] has them all).
 pub const MLAB_INSERT: &str = include_str!("wgsl/mlab.wgsl");
 
-/// Listing 2 (`ht_insert`); needs `HT_K`, `ht_tail_add` and [`KERNEL`] ([`hybrid`] has them all).
+/// Listing 2 (`ht_insert`); needs `HT_K`, `ht_tail_add` and [`KERNEL`] ([`hybrid()`] has them all).
 pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
 
-/// The compositor's bindings and helpers (see [`compositor`]).
+/// The compositor's bindings and helpers (see [`compositor()`]).
 const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");
 const COMPOSITE_MLAB: &str = include_str!("wgsl/composite_mlab.wgsl");
 const COMPOSITE_HT: &str = include_str!("wgsl/composite_ht.wgsl");
@@ -90,7 +90,7 @@ pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
     ))
 }
 
-/// [`mlab`] or [`hybrid`] for `layers`, then the compositor's bindings and its entry point
+/// [`mlab()`] or [`hybrid()`] for `layers`, then the compositor's bindings and its entry point
 /// `composite` (binding layout in `docs/gpu.md` and at the top of that text): the exact source
 /// that [`crate::Compositor`] compiles ([`crate::Compositor::source`]).
 pub fn compositor(layers: Layers, arith: Arith) -> Result<String, GpuError> {
