@@ -64,6 +64,13 @@ impl Gpu {
         Ok(Gpu { device, queue, info })
     }
 
+    /// A renderer's own device and queue (any backend), with its adapter's info: the
+    /// compositor then shares them. The device's limits decide the bands
+    /// ([`Compositor::max_binding_bytes`]).
+    pub fn with_device(device: wgpu::Device, queue: wgpu::Queue, info: wgpu::AdapterInfo) -> Gpu {
+        Gpu { device, queue, info }
+    }
+
     /// The adapter: name, driver, driver info, backend.
     pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
         &self.info
