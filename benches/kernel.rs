@@ -17,7 +17,8 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use mlab::lanes::{self, HybridSpan, LANES, MlabSpan};
 use mlab::{
-    Arithmetic, Background, Paper, Row, TailFormat, Unbiased, hybrid, mlab as listing1, resolve_rows, to_rgba8,
+    Arithmetic, Background, Framebuffer, Paper, Row, SpanFramebuffer, TailFormat, Unbiased, hybrid, mlab as listing1,
+    resolve_rows, to_rgba8,
 };
 use mlab_reference::Rng;
 use std::hint::black_box;
@@ -296,37 +297,59 @@ fn insert_small(c: &mut Criterion) {
 }
 
 #[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
-fn resolve_scalar(out: &mut [[u8; 4]], pixels: &[[Row; 4]], bg: Background) {
+fn resolve_scalar<const M: usize>(out: &mut [[u8; 4]], pixels: &[[Row; M]], bg: Background) {
     for (o, p) in out.iter_mut().zip(pixels) {
         *o = to_rgba8(resolve_rows(p).pixel(bg));
     }
 }
 
+/// The integer RGBA8 resolve (what `resolve_rgba8` writes for MLAB), whole frame, span
+/// storage. Its work is inlined into `Grid::resolve_rgba8`: count it inclusive.
 #[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
-fn resolve_lanes(out: &mut [[u8; 4]], spans: &[MlabSpan<4>], bg: Background) {
+fn resolve_lanes<const M: usize>(out: &mut [[u8; 4]], fb: &SpanFramebuffer<'_, M>, bg: Background) {
+    fb.resolve_rgba8(out, bg).expect("size");
+}
+
+/// The f32 resolve in lanes, then `to_rgba8` in lanes (`ResolvedLanes::rgba8`): the RGBA8
+/// resolve before the integer one.
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
+fn resolve_lanes_f32<const M: usize>(out: &mut [[u8; 4]], spans: &[MlabSpan<M>], bg: Background) {
     for (o, s) in out.chunks_exact_mut(LANES).zip(spans) {
-        o.copy_from_slice(&lanes::mlab_resolve_rgba8(s, bg));
+        o.copy_from_slice(&lanes::mlab_resolve(s).rgba8(bg));
     }
+}
+
+fn resolve_m<const M: usize>(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>, stream: &[Step]) {
+    let mut pixels = vec![[Row::EMPTY; M]; W * H];
+    mlab_scalar::<Unbiased, M>(&mut pixels, stream);
+    let spans: Vec<MlabSpan<M>> = pixels
+        .chunks_exact(LANES)
+        .map(|c| from_pixel_major(c.try_into().expect("8 pixels")))
+        .collect();
+    let mut storage: Vec<Row> = spans.iter().flatten().flatten().copied().collect();
+    let fb = SpanFramebuffer::<M>::new(&mut storage, W as u32, H as u32).expect("size");
+    let bg = Background::Opaque(mlab::glam::Vec3::new(0.2, 0.3, 0.4));
+    let mut out = vec![[0u8; 4]; W * H];
+    g.bench_function(BenchmarkId::new("mlab_scalar", M), |b| {
+        b.iter(|| resolve_scalar::<M>(&mut out, black_box(&pixels), bg))
+    });
+    g.bench_function(BenchmarkId::new("mlab_lanes", M), |b| {
+        b.iter(|| resolve_lanes::<M>(&mut out, black_box(&fb), bg))
+    });
+    g.bench_function(BenchmarkId::new("mlab_lanes_f32", M), |b| {
+        b.iter(|| resolve_lanes_f32::<M>(&mut out, black_box(&spans), bg))
+    });
 }
 
 fn resolve(c: &mut Criterion) {
     let stream = random_stream(SPANS);
-    let mut pixels = vec![[Row::EMPTY; 4]; W * H];
-    mlab_scalar::<Unbiased, 4>(&mut pixels, &stream);
-    let spans: Vec<MlabSpan<4>> = pixels
-        .chunks_exact(LANES)
-        .map(|c| from_pixel_major(c.try_into().expect("8 pixels")))
-        .collect();
     let bg = Background::Opaque(mlab::glam::Vec3::new(0.2, 0.3, 0.4));
     let mut out = vec![[0u8; 4]; W * H];
     let mut g = c.benchmark_group("resolve_rgba8");
     g.throughput(Throughput::Elements((W * H) as u64));
-    g.bench_function(BenchmarkId::new("mlab_scalar", 4), |b| {
-        b.iter(|| resolve_scalar(&mut out, black_box(&pixels), bg))
-    });
-    g.bench_function(BenchmarkId::new("mlab_lanes", 4), |b| {
-        b.iter(|| resolve_lanes(&mut out, black_box(&spans), bg))
-    });
+    resolve_m::<1>(&mut g, &stream);
+    resolve_m::<4>(&mut g, &stream);
+    resolve_m::<8>(&mut g, &stream);
     let mut hp = vec![([Row::EMPTY; 3], mlab::Tail::EMPTY); W * H];
     hybrid_scalar(&mut hp, &stream);
     let mut hs = vec![HybridSpan::<3>::default(); SPANS];
@@ -341,7 +364,7 @@ fn resolve(c: &mut Criterion) {
     g.bench_function(BenchmarkId::new("ht_lanes", 3), |b| {
         b.iter(|| {
             for (o, s) in out.chunks_exact_mut(LANES).zip(black_box(&hs)) {
-                o.copy_from_slice(&lanes::hybrid_resolve_rgba8(s, bg));
+                o.copy_from_slice(&lanes::hybrid_resolve(s).rgba8(bg));
             }
         })
     });

@@ -16,8 +16,15 @@
 //! ```text
 //! T_tail = (1 - S_a / n)^n
 //! c_tail = S_c / S_a                                    (the tail's average color)
-//! C      = C_head + T_head * (c_tail * (1 - T_tail) + C_background * T_tail)
+//! C_tail = c_tail * (1 - T_tail)
+//! C      = C_head + T_head * C_tail,  T = T_head * T_tail   (hybrid::resolve)
+//! pixel  = C + C_background * T                         (Resolved::over, Eq. 6)
 //! ```
+//!
+//! The background enters once, behind the whole composite, not inside the tail's term (the
+//! two are equal in exact arithmetic, not in f32). The exact f32 program, every step and
+//! branch (the all-opaque `1 / (S_a / 255)` one among them), is in `docs/layout.md`
+//! ("f32 resolve of HT").
 //!
 //! `c_tail * (1 - T_tail) = S_c * g` with `g = (1 - T_tail) / S_a`. With `x = 1 - S_a / n`,
 //! `g = (1 - x^n) / (n (1 - x)) = (1 + x + ... + x^(n-1)) / n`: the kernel computes this

@@ -25,8 +25,10 @@
 //!
 //! **Colors** are linear everywhere: fragment colors (premultiplied unless a constructor
 //! says straight) and every output. [`to_rgba8`] and [`Framebuffer::resolve_rgba8`] write
-//! linear unorm8 (`floor(v * 255 + 0.5)`), **not** sRGB-encoded bytes: upload them to a
-//! linear `Rgba8Unorm` target, or resolve to f32 or RGBA16F and encode for display.
+//! linear unorm8 (the nearest byte of `255 v`; for MLAB `resolve_rgba8` is the integer
+//! resolve of `docs/layout.md`, the same bytes on every backend and in a shader), **not**
+//! sRGB-encoded bytes: upload them to a linear `Rgba8Unorm` target, or resolve to f32 or
+//! RGBA16F and encode for display.
 //!
 //! **Equal depths**: a fragment goes in front of the rows at its depth (Listing 1's `<=`), so
 //! coplanar fragments blend like OVER in submission order, the **later one in front**. A

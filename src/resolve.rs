@@ -6,9 +6,15 @@
 //! ```
 //!
 //! Evaluated in f32 in one fixed order (per row, with `v` the visibility so far and bytes
-//! as exact f32: `w = v * (1/255)`, `a += byte * w`, `v = T_byte * w`), with separate
-//! multiplies and adds, never FMA.
-//! The lane kernels evaluate the same expression tree, so their pixels are bit-identical.
+//! as exact f32: `w = v * (1/255)`, `a += byte * w`, `v = T_byte * w`, every row visited,
+//! empty rows too), with separate multiplies and adds, never FMA; the exact programs of
+//! the MLAB and HT f32 resolves, and of the background and the pixel writers, are in
+//! `docs/layout.md` ("Resolve"). The lane kernels evaluate the same expression tree, so
+//! their pixels are bit-identical.
+//!
+//! MLAB's RGBA8 ([`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8)) is the
+//! integer resolve of `docs/layout.md` ("Integer resolve"), crate-private module `int`: Q15
+//! visibility, `(x y + 16384) >> 15` products, saturating 16-bit accumulators.
 
 use glam::{Vec3, Vec4};
 use half::f16;
@@ -226,6 +232,105 @@ pub(crate) fn resolve_lanes<F: FloatLanes>(
     combine_lanes(head, tail_lanes::<F>(sums, alpha, count))
 }
 
+/// The integer RGBA8 resolve (`docs/layout.md`, "Integer resolve"): what
+/// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) writes for MLAB. Every
+/// value is an unsigned integer below `2^31`; the one product is [`q15`]; the same bytes in
+/// scalar code, in every `wide` backend (`src/lanes/x8.rs`, 16-bit lanes) and in a shader.
+pub(crate) mod int {
+    use super::Background;
+
+    /// Visibility 1 (Q15): the visibility `V` of the layers in front is held as
+    /// `v ~ 32767 V`.
+    pub(crate) const VIS_ONE: u32 = 32767;
+    /// A color accumulator starts at half an output step (1/128 byte), so that the final
+    /// `>> 7` rounds to nearest.
+    pub(crate) const ACC_START: u32 = 64;
+    /// Largest accumulator value (the 16-bit lanes add with signed saturation): `255.99`
+    /// bytes, above every value that rounds to 255.
+    pub(crate) const ACC_MAX: u32 = 32767;
+    /// A background channel `b` in `[0, 1]` enters as `round(b * 32640)` (`32640 = 255 * 128`,
+    /// the accumulator's unit).
+    pub(crate) const BG_SCALE: f32 = 32640.0;
+
+    /// `(x * y + 16384) >> 15` for `x, y` in `0..=32767`: the rounded Q15 product (x86
+    /// `pmulhrsw`, NEON `sqrdmulh`, wasm `q15mulr_sat` agree on these operands). Below 2^30.
+    #[inline(always)]
+    pub(crate) const fn q15(x: u32, y: u32) -> u32 {
+        (x * y + 16384) >> 15
+    }
+
+    /// A row byte's factor: color `c` as `128 c`, transmittance `t` as `floor(257 t / 2)`
+    /// (`~ 32768 t / 255`; 32767 for `t = 255`).
+    #[inline(always)]
+    pub(crate) const fn t_factor(t: u32) -> u32 {
+        (t * 257) >> 1
+    }
+
+    /// One background channel: clamped to `[0, 1]` as [`crate::to_rgba8`] clamps (NaN to
+    /// 0), then `floor(b * 32640 + 0.5)` in f32 (a multiply, then an add).
+    #[inline]
+    #[expect(
+        clippy::cast_possible_truncation,
+        clippy::cast_sign_loss,
+        reason = "b in [0, 1]: b * 32640 + 0.5 in [0.5, 32640.5], truncated as specified"
+    )]
+    pub(crate) fn background_channel(b: f32) -> u32 {
+        let b = if b > 1.0 { 1.0 } else { b };
+        let b = if b >= 0.0 { b } else { 0.0 };
+        (b * BG_SCALE + 0.5) as u32
+    }
+
+    /// The background's three channels, or `None` for [`Background::Transparent`].
+    #[inline]
+    pub(crate) fn background(bg: Background) -> Option<[u32; 3]> {
+        match bg {
+            Background::Opaque(c) => Some(c.to_array().map(background_channel)),
+            Background::Transparent => None,
+        }
+    }
+
+    /// Eq. 5 in integers over rows given as `[R, G, B, T]` bytes, front to back, every row
+    /// visited: per row `acc_c = min(32767, acc_c + q15(128 c, v))` for each channel, then
+    /// `v = q15(floor(257 t / 2), v)`. Returns the three accumulators and `v`.
+    #[inline(always)]
+    pub(crate) fn layers(rows: impl Iterator<Item = [u8; 4]>) -> ([u32; 3], u32) {
+        let mut acc = [ACC_START; 3];
+        let mut v = VIS_ONE;
+        for [r, g, b, t] in rows {
+            for (a, c) in acc.iter_mut().zip([r, g, b]) {
+                *a = (*a + q15(128 * c as u32, v)).min(ACC_MAX);
+            }
+            v = q15(t_factor(t as u32), v);
+        }
+        (acc, v)
+    }
+
+    /// The pixel from the accumulators and the visibility: over an opaque background
+    /// `min(32767, acc_c + q15(bg_c, v)) >> 7` and alpha 255; premultiplied (transparent)
+    /// `acc_c >> 7` and alpha `(q15(32767 - v, 32640) + 64) >> 7`.
+    #[inline(always)]
+    #[expect(clippy::cast_possible_truncation, reason = "every value is at most 32767 >> 7 = 255")]
+    pub(crate) fn pixel(acc: [u32; 3], v: u32, bg: Option<[u32; 3]>) -> [u8; 4] {
+        match bg {
+            Some(bg) => {
+                let c: [u32; 3] = core::array::from_fn(|i| (acc[i] + q15(bg[i], v)).min(ACC_MAX) >> 7);
+                [c[0] as u8, c[1] as u8, c[2] as u8, 255]
+            }
+            None => {
+                let a = (q15(VIS_ONE - v, 32640) + 64) >> 7;
+                [(acc[0] >> 7) as u8, (acc[1] >> 7) as u8, (acc[2] >> 7) as u8, a as u8]
+            }
+        }
+    }
+
+    /// The integer RGBA8 resolve of one pixel's rows.
+    #[inline]
+    pub(crate) fn rgba8(rows: &[crate::Row], bg: Background) -> [u8; 4] {
+        let (acc, v) = layers(rows.iter().map(|r| r.rgbt()));
+        pixel(acc, v, background(bg))
+    }
+}
+
 /// RGBA8 from a pixel: each channel clamped to `[0, 1]`, then `floor(x * 255 + 0.5)`
 /// (NaN becomes 0). Byte order R, G, B, A.
 #[inline]
@@ -266,5 +371,126 @@ mod tests {
             to_rgba16f(Vec4::new(0.0, 0.5, 4.0, 1.0)).map(f16::to_f32),
             [0.0, 0.5, 4.0, 1.0]
         );
+    }
+}
+
+#[cfg(test)]
+mod int_tests {
+    //! The integer resolve: lanes (both arrangements) against the scalar definition, byte for
+    //! byte, on every backend the unit tests run on; the exact cases of `docs/layout.md`.
+    use super::int;
+    use super::*;
+    use crate::lanes::{self, LANES};
+
+    /// A deterministic generator (SplitMix64).
+    struct Mix(u64);
+    impl Mix {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        /// Any 8 bytes, or (one time in four each) an empty, an opaque or an invisible row.
+        fn row(&mut self) -> Row {
+            let x = self.next();
+            let r = Row::from_bytes(x.to_le_bytes());
+            match x >> 62 {
+                0 => Row::EMPTY,
+                1 => Row::new([x as u8, (x >> 8) as u8, (x >> 16) as u8], 0, 1.0),
+                _ => r,
+            }
+        }
+    }
+
+    const BACKGROUNDS: [Background; 5] = [
+        Background::Transparent,
+        Background::Opaque(Vec3::new(0.2, 0.5, 1.0)),
+        Background::Opaque(Vec3::ZERO),
+        Background::Opaque(Vec3::ONE),
+        Background::Opaque(Vec3::new(f32::NAN, f32::INFINITY, -1.0)),
+    ];
+
+    fn check<const M: usize>(mix: &mut Mix) {
+        let pixels: [[Row; M]; LANES] = core::array::from_fn(|_| core::array::from_fn(|_| mix.row()));
+        let span: [[Row; LANES]; M] = core::array::from_fn(|j| core::array::from_fn(|p| pixels[p][j]));
+        for bg in BACKGROUNDS {
+            let want = pixels.map(|p| int::rgba8(&p, bg));
+            assert_eq!(
+                lanes::mlab_resolve_rgba8(&span, bg),
+                want,
+                "M = {M} spans {bg:?}: {pixels:?}"
+            );
+            assert_eq!(
+                lanes::mlab_resolve_pixel_major_rgba8(&pixels, bg),
+                want,
+                "M = {M} pixel-major {bg:?}: {pixels:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn lanes_match_scalar_byte_for_byte() {
+        let mut mix = Mix(22);
+        for _ in 0..400 {
+            check::<1>(&mut mix);
+            check::<2>(&mut mix);
+            check::<3>(&mut mix);
+            check::<4>(&mut mix);
+            check::<8>(&mut mix);
+        }
+        // Saturation: 300 bright additive rows (the accumulators stop at 32767).
+        let bright = [[Row::new([255, 200, 1], 255, 1.0); LANES]; 300];
+        let want = int::rgba8(&[Row::new([255, 200, 1], 255, 1.0); 300], Background::Transparent);
+        // Each `T = 255` row lowers `v` by one unit while `v > 16384` (docs/layout.md): 300
+        // of them leave alpha 2 (255 * 300 / 32767 = 2.3).
+        assert_eq!(want, [255, 255, 255, 2]);
+        assert_eq!(
+            lanes::mlab_resolve_rgba8(&bright, Background::Transparent),
+            [want; LANES]
+        );
+    }
+
+    /// Every single row (each channel sees every (color, T) pair) in lanes and scalar.
+    #[test]
+    fn every_single_row_in_lanes() {
+        for t in 0..=255u8 {
+            for c0 in (0..256).step_by(LANES) {
+                let rows: [Row; LANES] = core::array::from_fn(|i| {
+                    let c = (c0 + i) as u8;
+                    Row::new([c, 255 - c, c ^ 0xa5], t, 1.0)
+                });
+                for bg in BACKGROUNDS {
+                    let want = rows.map(|r| int::rgba8(&[r], bg));
+                    assert_eq!(lanes::mlab_resolve_rgba8(&[rows], bg), want);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn exact_cases() {
+        // An empty pixel is a byte background exactly; any number of empty rows too.
+        for k in 0..=255u8 {
+            let bg = Background::Opaque(Vec3::splat(k as f32 / 255.0));
+            assert_eq!(int::rgba8(&[], bg), [k, k, k, 255]);
+            assert_eq!(int::rgba8(&[Row::EMPTY; 8], bg), [k, k, k, 255]);
+        }
+        // An opaque row shows its bytes, and hides what is behind it.
+        for c in 0..=255u8 {
+            let front = Row::new([c, 255 - c, c / 3], 0, 1.0);
+            for bg in [Background::Transparent, Background::Opaque(Vec3::ONE)] {
+                let want = [c, 255 - c, c / 3, 255];
+                assert_eq!(int::rgba8(&[front], bg), want);
+                assert_eq!(int::rgba8(&[front, Row::new([255; 3], 0, 2.0)], bg), want);
+            }
+        }
+        // The alpha formula rounds `255 (1 - v / 32767)` to nearest for every v.
+        for v in 0..=int::VIS_ONE {
+            let a = int::pixel([0; 3], v, None)[3] as f64;
+            let exact = 255.0 * (1.0 - v as f64 / 32767.0);
+            assert!((a - exact).abs() <= 0.5 + 1.0 / 128.0, "v = {v}: {a} vs {exact}");
+        }
     }
 }

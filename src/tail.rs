@@ -86,9 +86,11 @@ pub trait TailFormat:
     /// Resolve the tail alone (Bavoil-Myers, see the [`crate::hybrid`] docs).
     ///
     /// Any tail bytes give a finite result: color channels in `[0, COLOR_MAX / 255]` (the
-    /// tail never amplifies its light), transmittance in `[0, 1]` (a mean alpha above 1,
-    /// possible only in arbitrary bytes, is clamped to 1; a zero count resolves as if the
-    /// count were 1).
+    /// tail never amplifies its light), transmittance in `[0, 1]` (a zero count resolves as
+    /// if the count were 1). A mean alpha above 1 is clamped to 1, and the color factor is
+    /// then `1 / (S_a / 255)`: in f32 this happens for most all-opaque tails too (`S_a / 255`
+    /// rounds above `n` for counts 3, 5, 6, ...), not only in arbitrary bytes. The exact f32
+    /// program is in `docs/layout.md` ("f32 resolve of HT").
     #[inline]
     fn resolve(self) -> Resolved {
         let (color, t) = tail_lanes::<f32>(self.color_sum(), self.alpha_sum(), self.count());

@@ -161,6 +161,54 @@ fn mlab_stream_m<const M: usize, A: Model>(input: &mut Input) {
     if n <= M && occluding(&accepted) {
         check_close(array.resolve(), exact(&accepted), multilinear_bound(&quant), &accepted);
     }
+    check_int_resolve(array.rows(), &accepted);
+}
+
+/// The integer RGBA8 resolve of MLAB rows (`SpanFramebuffer::resolve_rgba8` and
+/// `MlabFramebuffer::resolve_rgba8` of one 8-pixel span holding them in every lane) against
+/// the reference formula byte for byte, and the reference against the exact composite of
+/// the rows within the derived bound (`mlab_reference::resolve_int`), over a transparent,
+/// a black, a white and a colored background.
+fn check_int_resolve<const M: usize>(rows: &[Row; M], context: &dyn core::fmt::Debug) {
+    for bg in [
+        Background::Transparent,
+        Background::Opaque(Vec3::ZERO),
+        Background::Opaque(Vec3::ONE),
+        Background::Opaque(Vec3::new(0.2, 0.5, 0.7)),
+    ] {
+        let want = mlab_reference::resolve_int::rgba8(rows, bg);
+        let mut pm: Vec<Row> = (0..LANES).flat_map(|_| rows.iter().copied()).collect();
+        let mut out = [[0u8; 4]; LANES];
+        Grid::<mlab::Mlab<M>, PixelMajor>::new(&mut pm, 8, 1)
+            .expect("8 x 1")
+            .resolve_rgba8(&mut out, bg)
+            .expect("8 x 1");
+        assert_eq!(
+            out, [want; LANES],
+            "M = {M} pixel-major integer resolve {bg:?} of {rows:?} ({context:?})"
+        );
+        let mut sp: Vec<Row> = rows.iter().flat_map(|&r| [r; LANES]).collect();
+        Grid::<mlab::Mlab<M>, Spans>::new(&mut sp, 8, 1)
+            .expect("8 x 1")
+            .resolve_rgba8(&mut out, bg)
+            .expect("8 x 1");
+        assert_eq!(
+            out, [want; LANES],
+            "M = {M} span integer resolve {bg:?} of {rows:?} ({context:?})"
+        );
+        let exact = mlab_reference::resolve_int::exact(rows, bg);
+        let bound = mlab_reference::resolve_int::bound(rows, bg);
+        for ch in 0..4 {
+            let err = (f64::from(want[ch]) - exact[ch]).abs();
+            assert!(
+                err <= bound[ch] + 1e-9,
+                "M = {M} integer resolve {bg:?} of {rows:?}: channel {ch} {} vs exact {} (bound {}) ({context:?})",
+                want[ch],
+                exact[ch],
+                bound[ch]
+            );
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -488,6 +536,8 @@ fn garbage_mlab<const M: usize, A: Model>(input: &mut Input) {
     check_resolved(r, M as f32, &context);
     check_close(r, composite_rows_f64(&rows), 1e-5, &context);
     check_pixels(r, input, &context);
+    // The integer RGBA8 resolve of any rows: the reference formula, within its bound.
+    check_int_resolve(&rows, &context);
 
     // Insert of any row into any rows: Listing 1 step by step, never a panic.
     let (mut expected, pushed) = ref_bubble(&rows, new);
@@ -698,6 +748,9 @@ pub trait Layout {
     fn ref_insert(slots: &mut [Row], row: Row);
     /// The resolve of one pixel's slots, split here.
     fn ref_resolve(slots: &[Row]) -> Resolved;
+    /// What `Framebuffer::resolve_rgba8` writes for one pixel's slots: MLAB the reference
+    /// integer resolve (`mlab_reference::resolve_int`), HT `to_rgba8` of the f32 resolve.
+    fn ref_rgba8(slots: &[Row], bg: Background) -> [u8; 4];
     /// A cleared pixel.
     fn cleared(slots: &mut [Row]);
     /// One pixel's contents ([`Grid::pixel`]) as its `SLOTS` rows (HT: head rows, then the tail).
@@ -778,6 +831,9 @@ impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
     fn ref_resolve(slots: &[Row]) -> Resolved {
         resolve_rows(slots)
     }
+    fn ref_rgba8(slots: &[Row], bg: Background) -> [u8; 4] {
+        mlab_reference::resolve_int::rgba8(slots, bg)
+    }
     fn cleared(slots: &mut [Row]) {
         slots.fill(Row::EMPTY);
     }
@@ -831,6 +887,9 @@ impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
     }
     fn ref_resolve(slots: &[Row]) -> Resolved {
         hybrid::resolve(&slots[..K], <A::Tail as TailFormat>::from_bytes(slots[K].to_bytes()))
+    }
+    fn ref_rgba8(slots: &[Row], bg: Background) -> [u8; 4] {
+        to_rgba8(Self::ref_resolve(slots).pixel(bg))
     }
     fn cleared(slots: &mut [Row]) {
         slots[..K].fill(Row::EMPTY);
@@ -1123,7 +1182,7 @@ fn spans<L: Layout>(input: &mut Input) {
                             let got = out[(y * w + x) as usize];
                             let want = match which % 3 {
                                 0 => want,
-                                1 => Vec4::from_array(to_rgba8(want).map(f32::from)),
+                                1 => Vec4::from_array(L::ref_rgba8(&before[p..p + L::SLOTS], bg).map(f32::from)),
                                 _ => Vec4::from_array(to_rgba16f(want).map(f16::to_f32)),
                             };
                             assert_eq!(got, want, "pixel ({x}, {y})");

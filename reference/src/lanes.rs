@@ -9,8 +9,8 @@
 use mlab::glam::Vec3;
 use mlab::lanes::{self, FragmentLanes, HybridSpan, LANES, MlabSpan, ResolvedLanes};
 use mlab::{
-    Arithmetic, Background, Fragment, Framebuffer, Hybrid, HybridSpanFramebuffer, Resolved, Row, SpanFramebuffer,
-    TailFormat, mlab as listing1, to_rgba8,
+    Arithmetic, Background, Fragment, Framebuffer, Hybrid, HybridSpanFramebuffer, MlabFramebuffer, Resolved, Row,
+    SpanFramebuffer, TailFormat, mlab as listing1, to_rgba8,
 };
 
 use crate::model::Model;
@@ -82,17 +82,30 @@ pub fn check_mlab_rows<const M: usize>(span: &MlabSpan<M>, pixels: &[[Row; M]; L
 
 /// An MLAB span against 8 scalar arrays: rows byte for byte ([`check_mlab_rows`]);
 /// `lanes::mlab_resolve` bit for bit against `resolve_rows` of each pixel
-/// ([`check_resolved_lanes`]); `lanes::mlab_resolve_rgba8` against `to_rgba8` for every
+/// ([`check_resolved_lanes`]); the integer RGBA8 resolve of both arrangements
+/// (`Framebuffer::resolve_rgba8` of a `SpanFramebuffer` over the span and of an
+/// `MlabFramebuffer` over the pixels) against [`crate::resolve_int::rgba8`] for every
 /// background.
 pub fn check_mlab_span<const M: usize>(span: &MlabSpan<M>, pixels: &[[Row; M]; LANES]) -> Result<(), String> {
     check_mlab_rows(span, pixels)?;
     let want = pixels.map(|p| mlab::resolve_rows(&p));
     for bg in BACKGROUNDS {
-        let got = lanes::mlab_resolve_rgba8(span, bg);
-        let w = want.map(|r| to_rgba8(r.pixel(bg)));
-        ensure!(got == w, "M = {M} mlab_resolve_rgba8 {bg:?}: {got:?} vs {w:?}");
+        let w = pixels.map(|p| crate::resolve_int::rgba8(&p, bg));
+        let mut spans: Vec<Row> = span.iter().flatten().copied().collect();
+        let got = mlab_rgba8(&mut SpanFramebuffer::<M>::new(&mut spans, 8, 1), bg);
+        ensure!(got == w, "M = {M} span resolve_rgba8 {bg:?}: {got:?} vs {w:?}");
+        let mut rows: Vec<Row> = pixels.iter().flatten().copied().collect();
+        let got = mlab_rgba8(&mut MlabFramebuffer::<M>::new(&mut rows, 8, 1), bg);
+        ensure!(got == w, "M = {M} pixel-major resolve_rgba8 {bg:?}: {got:?} vs {w:?}");
     }
     check_resolved_lanes(&lanes::mlab_resolve(span), &want)
+}
+
+/// `resolve_rgba8` of an 8 x 1 framebuffer.
+fn mlab_rgba8<F: Framebuffer, E: core::fmt::Debug>(fb: &mut Result<F, E>, bg: Background) -> [[u8; 4]; LANES] {
+    let mut out = [[0u8; 4]; LANES];
+    fb.as_mut().expect("8 x 1").resolve_rgba8(&mut out, bg).expect("8 x 1");
+    out
 }
 
 /// An HT span against 8 scalar pixels: head rows and tail bytes equal.
@@ -123,7 +136,8 @@ pub fn check_hybrid_rows<const K: usize, A: Arithmetic>(
 
 /// An HT span against 8 scalar pixels: bytes ([`check_hybrid_rows`]); `lanes::hybrid_resolve`
 /// bit for bit against `Hybrid::resolve` ([`check_resolved_lanes`]);
-/// `lanes::hybrid_resolve_rgba8` against `to_rgba8` for every background.
+/// `Framebuffer::resolve_rgba8` of a `HybridSpanFramebuffer` over the span against
+/// `to_rgba8` for every background.
 pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
     span: &HybridSpan<K, A>,
     pixels: &[Hybrid<K, A>; LANES],
@@ -131,7 +145,9 @@ pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
     check_hybrid_rows(span, pixels)?;
     let want = pixels.map(|p| p.resolve());
     for bg in BACKGROUNDS {
-        let got = lanes::hybrid_resolve_rgba8(span, bg);
+        let mut rows: Vec<Row> = span.head.iter().flatten().copied().collect();
+        rows.extend(span.tails.iter().map(|t| Row::from_bytes(t.to_bytes())));
+        let got = mlab_rgba8(&mut HybridSpanFramebuffer::<K, A>::new(&mut rows, 8, 1), bg);
         let w = want.map(|r| to_rgba8(r.pixel(bg)));
         ensure!(got == w, "K = {K} hybrid_resolve_rgba8 {bg:?}: {got:?} vs {w:?}");
     }

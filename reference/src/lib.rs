@@ -29,6 +29,7 @@
 pub mod lanes;
 pub mod model;
 pub mod oracle;
+pub mod resolve_int;
 pub mod rng;
 
 pub use model::Model;

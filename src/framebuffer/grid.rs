@@ -8,7 +8,7 @@ use core::fmt::Debug;
 use core::marker::PhantomData;
 
 use super::pixel::Pixel;
-use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, clear_rgba8, write_lines, write_spans};
+use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
 use crate::lanes::{LANES, LANES_U32, ResolvedLanes};
 use crate::resolve::{Background, Resolved, to_rgba16f};
 use crate::row::Row;
@@ -159,7 +159,7 @@ impl Arrangement for PixelMajor {
             .and_then(|(first, valid)| rows.get(first * P::ROWS..(first + valid) * P::ROWS))
         {
             Some(px) => P::pm_resolve_span_rgba8(px, bg),
-            None => clear_rgba8(bg),
+            None => P::clear_rgba8(bg),
         }
     }
 
@@ -252,7 +252,7 @@ impl Arrangement for Spans {
     fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES] {
         match d.span_index(span, y).and_then(|i| unit(rows, i, LANES * P::ROWS)) {
             Some(s) => P::span_resolve_rgba8(s, bg),
-            None => clear_rgba8(bg),
+            None => P::clear_rgba8(bg),
         }
     }
 
@@ -263,7 +263,7 @@ impl Arrangement for Spans {
 
     #[inline(always)]
     fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background) {
-        units::<P, _>(line, out, |s| P::span_resolve_rgba8(s, bg));
+        P::span_resolve_line_rgba8(line, out, bg);
     }
 }
 

@@ -246,9 +246,17 @@ pub(crate) fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
 ///
 /// Colors: every input is **linear** (not sRGB), premultiplied unless a method says
 /// straight; every output is linear too. [`resolve_rgba8`](Self::resolve_rgba8) writes
-/// linear unorm8 (`floor(v * 255 + 0.5)`), not sRGB-encoded bytes: upload it to an
-/// `Rgba8Unorm` texture (not `Rgba8UnormSrgb`), or encode it yourself from
-/// [`resolve_into`](Self::resolve_into) for display.
+/// linear unorm8, not sRGB-encoded bytes: upload it to an `Rgba8Unorm` texture (not
+/// `Rgba8UnormSrgb`), or encode it yourself from [`resolve_into`](Self::resolve_into) for
+/// display.
+///
+/// Which resolve: for MLAB, [`resolve_rgba8`](Self::resolve_rgba8) and
+/// [`resolve_span_rgba8`](Self::resolve_span_rgba8) are the integer resolve (`docs/layout.md`,
+/// "Integer resolve": the same bytes in scalar code, every SIMD backend and a shader; within
+/// one step of [`to_rgba8`](crate::to_rgba8) of the f32 resolve on valid fragments, which it
+/// replaces there by measurement, `docs/performance.md`); for HT they are `to_rgba8` of the
+/// f32 resolve. Every other resolve is the f32 one ([`Resolved`]; exact f32 programs in
+/// `docs/layout.md`).
 pub trait Framebuffer {
     /// The arithmetic of the merge, of quantization and of the HT tail.
     type Arith: Arithmetic;
@@ -340,8 +348,9 @@ pub trait Framebuffer {
         insert_fragments(self, x, y, fragments, mask, true)
     }
 
-    /// Resolve the 8 pixels of a span straight to RGBA8 (the span framebuffers keep the
-    /// values in registers); lanes past the edge are the background's.
+    /// Resolve the 8 pixels of a span straight to RGBA8 (MLAB: the integer resolve; HT:
+    /// [`to_rgba8`](crate::to_rgba8) of [`resolve_span`](Self::resolve_span)); lanes past the
+    /// edge, and every lane of a span outside, are an empty pixel's.
     #[inline]
     fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
         self.resolve_span(span, y).unwrap_or(CLEAR_LANES).rgba8(background)
@@ -355,7 +364,9 @@ pub trait Framebuffer {
         })
     }
 
-    /// Resolve every pixel into RGBA8 ([`to_rgba8`](crate::to_rgba8): linear unorm8, not sRGB), row-major.
+    /// Resolve every pixel into RGBA8 (linear unorm8, not sRGB), row-major: MLAB the integer
+    /// resolve, HT [`to_rgba8`](crate::to_rgba8) of the f32 resolve (see the trait docs);
+    /// the same bytes as [`resolve_span_rgba8`](Self::resolve_span_rgba8) span by span.
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
         write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
             self.resolve_span_rgba8(s, y, background)

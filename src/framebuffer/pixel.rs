@@ -87,6 +87,19 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     fn span_resolve(span: &[Row]) -> ResolvedLanes;
     #[doc(hidden)]
     fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES];
+    /// The whole stored spans of one line (`line`: its spans' rows), into `out`.
+    #[doc(hidden)]
+    fn span_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
+        for (o, s) in out.iter_mut().zip(line.chunks_exact(LANES * Self::ROWS)) {
+            *o = Self::span_resolve_rgba8(s, background);
+        }
+    }
+    /// The RGBA8 of 8 empty pixels (a span that does not exist), as this kind's RGBA8
+    /// resolve writes an empty pixel.
+    #[doc(hidden)]
+    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
+        clear_rgba8(background)
+    }
 }
 
 /// Gather rows `offset..offset + N` of each pixel of `px` (`stride` rows per pixel, at most
@@ -216,9 +229,13 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
 
     #[inline(always)]
     fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
-        for (o, px) in out.iter_mut().zip(line.as_chunks::<M>().0.as_chunks::<LANES>().0) {
-            *o = lanes::mlab_resolve_pixel_major_rgba8(px, background);
-        }
+        lanes::mlab_resolve_pixel_major_line_rgba8(line.as_chunks::<M>().0.as_chunks::<LANES>().0, out, background);
+    }
+
+    #[inline(always)]
+    fn span_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
+        let spans: &[[[Row; LANES]; M]] = line.as_chunks::<LANES>().0.as_chunks::<M>().0;
+        lanes::mlab_resolve_line_rgba8(spans, out, background);
     }
 
     /// With AVX, a span insert of one lane; without, the pixel's rows gathered, Listing 1 in
@@ -251,8 +268,14 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
         match layers::<M>(span) {
             Some(l) => lanes::mlab_resolve_rgba8(l, background),
-            None => clear_rgba8(background),
+            None => Self::clear_rgba8(background),
         }
+    }
+
+    /// The integer resolve of an empty pixel (`resolve::int`), which for a background that
+    /// is not a byte value may differ from [`crate::to_rgba8`] of it by one step.
+    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
+        [crate::resolve::int::rgba8(&[], background); LANES]
     }
 }
 

@@ -184,13 +184,45 @@ pub(crate) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES
     x8::mlab_resolve_pixel_major(pixels).lanes()
 }
 
-/// [`mlab_resolve_pixel_major`] straight to RGBA8.
+/// The integer RGBA8 resolve ([`mlab_resolve_rgba8`]) of 8 pixels stored pixel-major.
 #[inline(always)]
 pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     pixels: &[[Row; M]; LANES],
     background: Background,
 ) -> [[u8; 4]; LANES] {
-    x8::mlab_resolve_pixel_major(pixels).rgba8(background)
+    match crate::resolve::int::background(background) {
+        Some(bg) => x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(pixels, bg),
+        None => x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(pixels, [0; 3]),
+    }
+}
+
+/// [`mlab_resolve_pixel_major_rgba8`] of whole spans of pixel-major pixels into `out`, the
+/// background's case chosen once.
+#[inline(always)]
+pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
+    pixels: &[[[Row; M]; LANES]],
+    out: &mut [[[u8; 4]; LANES]],
+    background: Background,
+) {
+    let pairs = out.iter_mut().zip(pixels);
+    match crate::resolve::int::background(background) {
+        Some(bg) => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(p, bg)),
+        None => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(p, [0; 3])),
+    }
+}
+
+/// [`mlab_resolve_rgba8`] of whole stored spans into `out`, the background's case chosen once.
+#[inline(always)]
+pub(crate) fn mlab_resolve_line_rgba8<const M: usize>(
+    spans: &[MlabSpan<M>],
+    out: &mut [[[u8; 4]; LANES]],
+    background: Background,
+) {
+    let pairs = out.iter_mut().zip(spans);
+    match crate::resolve::int::background(background) {
+        Some(bg) => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, true>(s, bg)),
+        None => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, false>(s, [0; 3])),
+    }
 }
 
 /// HT resolve over a span (as [`crate::hybrid::resolve`] on each pixel).
@@ -221,22 +253,19 @@ impl ResolvedLanes {
     }
 }
 
-/// [`mlab_resolve`] straight to RGBA8, without leaving the registers until the end.
-#[inline]
-pub fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
-    x8::mlab_resolve(span).rgba8(background)
+/// The integer RGBA8 resolve of an MLAB span (`docs/layout.md`, "Integer resolve"; what
+/// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) writes for MLAB), in
+/// 16-bit lanes: byte-identical to the scalar `resolve::int::rgba8` of each pixel.
+#[inline(always)]
+pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
+    match crate::resolve::int::background(background) {
+        Some(bg) => x8::mlab_resolve_rgba8_int::<M, true>(span, bg),
+        None => x8::mlab_resolve_rgba8_int::<M, false>(span, [0; 3]),
+    }
 }
 
-/// [`hybrid_resolve`] straight to RGBA8.
-#[inline]
-pub fn hybrid_resolve_rgba8<const K: usize, A: Arithmetic>(
-    span: &HybridSpan<K, A>,
-    background: Background,
-) -> [[u8; 4]; LANES] {
-    hybrid_resolve_parts_rgba8(&span.head, &span.tails, background)
-}
-
-/// [`hybrid_resolve_rgba8`] on separate head layers and tails.
+/// The HT resolve of separate head layers and tails straight to RGBA8 (f32, then
+/// [`crate::to_rgba8`] per lane).
 #[inline(always)]
 pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],

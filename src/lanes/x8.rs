@@ -801,6 +801,222 @@ pub(super) fn rgba8(color: &[[f32; LANES]; 3], t: &[f32; LANES], background: Bac
     rgba8_lanes(color.map(f32x8::new), f32x8::new(*t), background)
 }
 
+/// Whether the build is x86 without SSSE3 (the x86-64 baseline, SSE2): no byte shuffle and no
+/// `pmulhrsw`, which `wide` would emulate lane by lane (195 instructions per pixel at M = 4);
+/// [`int8`] then has an SSE2 form of its own.
+macro_rules! sse2_only {
+    ($($item:item)*) => {
+        $(#[cfg(all(any(target_arch = "x86", target_arch = "x86_64"), not(target_feature = "ssse3")))] $item)*
+    };
+}
+macro_rules! not_sse2_only {
+    ($($item:item)*) => {
+        $(#[cfg(not(all(any(target_arch = "x86", target_arch = "x86_64"), not(target_feature = "ssse3"))))] $item)*
+    };
+}
+
+not_sse2_only! {
+/// The integer resolve (`crate::resolve::int`) in 16-bit lanes: four pixels per register,
+/// each pixel's four 16-bit slots `[R, G, B, T]` (its 8 bytes of a 128-bit half). Per layer,
+/// one shuffle, one shift, one `pmulhrsw`, one saturating add and one shuffle.
+mod int8 {
+    use super::*;
+    use crate::resolve::int;
+    use wide::i8x32;
+
+    /// A zeroing shuffle index.
+    const Z: i8 = -128;
+
+    /// Two copies of a 16-byte shuffle (each 128-bit half shuffles its own bytes).
+    const fn halves(h: [i8; 16]) -> i8x32 {
+        let mut out = [0i8; 32];
+        let mut i = 0;
+        while i < 16 {
+            out[i] = h[i];
+            out[i + 16] = h[i];
+            i += 1;
+        }
+        i8x32::new(out)
+    }
+
+    /// Each row's bytes to the 16-bit slots `[256 R, 256 G, 256 B, 257 T]` (two rows per half;
+    /// the depth bytes are dropped).
+    const ROW_SLOTS: [i8; 16] = [Z, 0, Z, 1, Z, 2, 3, 3, Z, 8, Z, 9, Z, 10, 11, 11];
+    /// Slot 3 of each pixel (its visibility product) to all four of its slots.
+    const BROADCAST_T: [i8; 16] = [6, 7, 6, 7, 6, 7, 6, 7, 14, 15, 14, 15, 14, 15, 14, 15];
+    /// The low bytes of the 16-bit slots of a half to its bytes 0..8 (`PACK_LO`) or 8..16
+    /// (`PACK_HI`), the other bytes zero.
+    const PACK_LO: [i8; 16] = [0, 2, 4, 6, 8, 10, 12, 14, Z, Z, Z, Z, Z, Z, Z, Z];
+    const PACK_HI: [i8; 16] = [Z, Z, Z, Z, Z, Z, Z, Z, 0, 2, 4, 6, 8, 10, 12, 14];
+
+    /// Four rows (pixels) as the factors `[128 R, 128 G, 128 B, floor(257 T / 2)]`.
+    #[inline(always)]
+    fn factors(rows: [Row; 4]) -> i16x16 {
+        let x: i8x32 = cast(rows);
+        let s: u16x16 = cast(x.swizzle_half(halves(ROW_SLOTS)));
+        cast(s >> 1)
+    }
+
+    /// One layer of four pixels: `acc += q15(f, v)` (saturating at 32767), then
+    /// `v = q15(T factor, v)` in every slot of the pixel.
+    #[inline(always)]
+    pub(super) fn layer(acc: &mut i16x16, v: &mut i16x16, f: i16x16) {
+        let p = f.mul_scale_round(*v);
+        *acc = acc.saturating_add(p);
+        *v = cast(cast::<i16x16, i8x32>(p).swizzle_half(halves(BROADCAST_T)));
+    }
+
+    /// Eq. 5 in integers over `m` layers of 8 pixels (`layer(j)`: the factors of pixels 0..4
+    /// and 4..8), then the pixels (`int::pixel` per lane): over the opaque background `bg`
+    /// when `OPAQUE`, else premultiplied (`bg` unused).
+    #[inline(always)]
+    pub(super) fn resolve<const OPAQUE: bool>(
+        m: usize,
+        layer_rows: impl Fn(usize) -> [Row; LANES],
+        bg: [u32; 3],
+    ) -> [[u8; 4]; LANES] {
+        let layer_factors = |j: usize| {
+            let l = layer_rows(j);
+            [factors([l[0], l[1], l[2], l[3]]), factors([l[4], l[5], l[6], l[7]])]
+        };
+        // Over an opaque background slot 3 (the visibility products, not read) starts at
+        // 32767 and stays there (saturating adds of non-negative values): its byte is the
+        // alpha 255.
+        let start = int::ACC_START as i16;
+        let alpha = if OPAQUE { int::ACC_MAX as i16 } else { start };
+        let mut acc = [i16x16::new(core::array::from_fn(|i| if i % 4 == 3 { alpha } else { start })); 2];
+        let mut v = [i16x16::splat(int::VIS_ONE as i16); 2];
+        for j in 0..m {
+            let f = layer_factors(j);
+            layer(&mut acc[0], &mut v[0], f[0]);
+            layer(&mut acc[1], &mut v[1], f[1]);
+        }
+        pixels::<OPAQUE>(acc, v, bg)
+    }
+
+    /// `int::pixel` on 8 pixels: the 16-bit results, then their low bytes in pixel order.
+    #[inline(always)]
+    fn pixels<const OPAQUE: bool>(acc: [i16x16; 2], v: [i16x16; 2], bg: [u32; 3]) -> [[u8; 4]; LANES] {
+        let q: [u16x16; 2] = if OPAQUE {
+            let [r, g, b] = bg;
+            let bg = i16x16::new(core::array::from_fn(|i| [r, g, b, 0][i % 4] as i16));
+            [0, 1].map(|i| cast::<i16x16, u16x16>(acc[i].saturating_add(bg.mul_scale_round(v[i]))) >> 7)
+        } else {
+            let color = u16x16::new(core::array::from_fn(|i| if i % 4 == 3 { 0 } else { 0xffff }));
+            [0, 1].map(|i| {
+                let a = (i16x16::splat(int::VIS_ONE as i16) - v[i]).mul_scale_round(i16x16::splat(32640));
+                let a = cast::<i16x16, u16x16>(a + i16x16::splat(64)) >> 7;
+                let c = cast::<i16x16, u16x16>(acc[i]) >> 7;
+                (c & color) | (a & !color)
+            })
+        };
+        let lo = cast::<u16x16, i8x32>(q[0]).swizzle_half(halves(PACK_LO));
+        let hi = cast::<u16x16, i8x32>(q[1]).swizzle_half(halves(PACK_HI));
+        let bytes: [u64; 4] = cast(lo | hi);
+        // The halves hold pixels [0, 1, 4, 5] and [2, 3, 6, 7].
+        let words: [u32; LANES] = cast([bytes[0], bytes[2], bytes[1], bytes[3]]);
+        words.map(u32::to_le_bytes)
+    }
+}
+
+}
+
+sse2_only! {
+/// The integer resolve (`crate::resolve::int`) on SSE2: two pixels per 128-bit register, each
+/// pixel's four 16-bit slots. The products are `q15(f, v) = mulhi(2 f, v) + (mullo(2 f, v) >> 15)`
+/// (`pmulhuw`, `pmullw`: `2 f v = 2 p`, whose high half is `p >> 15` and whose bit 15 is bit 14
+/// of `p`), from the doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]`, which one
+/// `punpcklbw` of the rows with their T bytes `& 0xfe` gives (`257 T & !1 = 2 floor(257 T / 2)`).
+mod int8 {
+    use super::*;
+    use crate::resolve::int;
+    use wide::{i16x8, u8x16, u16x8, u32x4};
+
+    /// `q15(f, v)` of the doubled factor `f2 = 2 f` and `v`, both in `0..=65535` and `0..=32767`.
+    #[inline(always)]
+    fn q15(f2: u16x8, v: u16x8) -> u16x8 {
+        f2.mul_keep_high(v) + ((f2 * v) >> 15)
+    }
+
+    /// Two rows (pixels) as the doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]`.
+    #[inline(always)]
+    fn factors(rows: [Row; 2]) -> u16x8 {
+        let w: [u32; 4] = cast(rows);
+        // The color words of both rows in the low 8 bytes (`pshufd`).
+        let x: u8x16 = cast(u32x4::new([w[0], w[2], w[1], w[3]]));
+        let t: u8x16 = x & cast::<u32x4, u8x16>(u32x4::splat(0xfe00_0000));
+        cast(u8x16::unpack_low(t, x))
+    }
+
+    /// One layer of two pixels: `acc += q15(f, v)` (saturating at 32767), then the new `v` in
+    /// every slot of the pixel (`pshuflw`, `pshufhw`).
+    #[inline(always)]
+    fn layer(acc: &mut i16x8, v: &mut u16x8, f2: u16x8) {
+        let p = q15(f2, *v);
+        *acc = acc.saturating_add(cast(p));
+        let a = p.to_array();
+        *v = u16x8::new([a[3], a[3], a[3], a[3], a[7], a[7], a[7], a[7]]);
+    }
+
+    /// The integer resolve of `m` layers of 8 pixels, as the SSSE3/AVX2 form computes it.
+    #[inline(always)]
+    pub(super) fn resolve<const OPAQUE: bool>(
+        m: usize,
+        layer_rows: impl Fn(usize) -> [Row; LANES],
+        bg: [u32; 3],
+    ) -> [[u8; 4]; LANES] {
+        let start = int::ACC_START as i16;
+        let alpha = if OPAQUE { int::ACC_MAX as i16 } else { start };
+        let mut acc = [i16x8::new(core::array::from_fn(|i| if i % 4 == 3 { alpha } else { start })); 4];
+        let mut v = [u16x8::splat(int::VIS_ONE as u16); 4];
+        for j in 0..m {
+            let l = layer_rows(j);
+            for k in 0..4 {
+                layer(&mut acc[k], &mut v[k], factors([l[2 * k], l[2 * k + 1]]));
+            }
+        }
+        let q: [i16x8; 4] = core::array::from_fn(|k| {
+            if OPAQUE {
+                let [r, g, b] = bg;
+                let bg2 = u16x8::new(core::array::from_fn(|i| (2 * [r, g, b, 0][i % 4]) as u16));
+                cast::<u16x8, i16x8>(cast::<i16x8, u16x8>(acc[k].saturating_add(cast(q15(bg2, v[k])))) >> 7)
+            } else {
+                let color = u16x8::new(core::array::from_fn(|i| if i % 4 == 3 { 0 } else { 0xffff }));
+                let a = q15(u16x8::splat(2 * 32640), u16x8::splat(int::VIS_ONE as u16) - v[k]);
+                let a = (a + u16x8::splat(64)) >> 7;
+                let c = cast::<i16x8, u16x8>(acc[k]) >> 7;
+                cast((c & color) | (a & !color))
+            }
+        });
+        let lo: [u32; 4] = cast(u8x16::narrow_i16x8(q[0], q[1]));
+        let hi: [u32; 4] = cast(u8x16::narrow_i16x8(q[2], q[3]));
+        core::array::from_fn(|p| if p < 4 { lo[p] } else { hi[p - 4] }.to_le_bytes())
+    }
+}
+}
+
+/// The integer RGBA8 resolve of an MLAB span (layer-major).
+#[inline(always)]
+pub(super) fn mlab_resolve_rgba8_int<const M: usize, const OPAQUE: bool>(
+    span: &MlabSpan<M>,
+    bg: [u32; 3],
+) -> [[u8; 4]; LANES] {
+    int8::resolve::<OPAQUE>(M, |j| span.get(j).copied().unwrap_or([Row::EMPTY; LANES]), bg)
+}
+
+/// The integer RGBA8 resolve of 8 pixels stored pixel-major (`pixels[lane][layer]`).
+#[inline(always)]
+pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize, const OPAQUE: bool>(
+    pixels: &[[Row; M]; LANES],
+    bg: [u32; 3],
+) -> [[u8; 4]; LANES] {
+    int8::resolve::<OPAQUE>(
+        M,
+        |j| core::array::from_fn(|p| pixels[p].get(j).copied().unwrap_or(Row::EMPTY)),
+        bg,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     //! The lane arithmetic helpers against plain integer formulas, for every operand

@@ -1,0 +1,162 @@
+//! The integer RGBA8 resolve, written from `docs/layout.md` ("Integer resolve") alone, in
+//! `u64` with plain division (the kernel uses `u32` and shifts), and its error bound against
+//! the exact composite of the rows (the derivation is in `docs/layout.md`).
+
+use mlab::{Background, Row};
+
+/// `round(x * y / 32768)`, halves up: `(x y + 16384) / 32768`.
+pub fn q15(x: u64, y: u64) -> u64 {
+    (x * y + 16384) / 32768
+}
+
+/// A background channel as the resolve takes it: clamped to `[0, 1]` (NaN to 0), then
+/// `floor(b * 32640 + 0.5)`, the multiply and the add each rounded to f32.
+pub fn background_channel(b: f32) -> u64 {
+    let b = if b.is_nan() { 0.0 } else { b.clamp(0.0, 1.0) };
+    let x = b * 32640.0;
+    let x = x + 0.5;
+    x.floor() as u64
+}
+
+/// The resolve's state after the rows: the three color accumulators and the visibility,
+/// and the visibility after each row (`vis[j]` in front of row `j`; `vis[M]` the last).
+pub fn state(rows: &[Row]) -> ([u64; 3], Vec<u64>) {
+    let mut acc = [64u64; 3];
+    let mut vis = vec![32767u64];
+    for r in rows {
+        let [cr, cg, cb, t] = r.to_bytes()[..4].try_into().map(|b: [u8; 4]| b.map(u64::from)).unwrap();
+        let v = *vis.last().unwrap();
+        for (a, c) in acc.iter_mut().zip([cr, cg, cb]) {
+            *a = (*a + q15(128 * c, v)).min(32767);
+        }
+        vis.push(q15(257 * t / 2, v));
+    }
+    (acc, vis)
+}
+
+/// The integer RGBA8 resolve of one pixel's rows, front to back.
+pub fn rgba8(rows: &[Row], bg: Background) -> [u8; 4] {
+    let (acc, vis) = state(rows);
+    let v = *vis.last().unwrap();
+    match bg {
+        Background::Opaque(c) => {
+            let b = c.to_array().map(background_channel);
+            let ch = |i: usize| ((acc[i] + q15(b[i], v)).min(32767) / 128) as u8;
+            [ch(0), ch(1), ch(2), 255]
+        }
+        Background::Transparent => {
+            let a = (q15(32767 - v, 32640) + 64) / 128;
+            [
+                (acc[0] / 128) as u8,
+                (acc[1] / 128) as u8,
+                (acc[2] / 128) as u8,
+                a as u8,
+            ]
+        }
+    }
+}
+
+/// The exact composite of the rows in bytes (f64): `255 (C + bg V)` per channel over an
+/// opaque background (the f32 background widened exactly), `255 C` and `255 (1 - V)`
+/// premultiplied; each clamped to `[0, 255]`, as the output is.
+pub fn exact(rows: &[Row], bg: Background) -> [f64; 4] {
+    let (c, v) = crate::model::composite_rows_f64(rows);
+    let clamp = |x: f64| x.clamp(0.0, 255.0);
+    match bg {
+        Background::Opaque(b) => {
+            let b = b.to_array();
+            [0, 1, 2]
+                .map(|i| clamp(255.0 * (c[i] + f64::from(b[i]) * v)))
+                .into_iter()
+                .chain([255.0])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap()
+        }
+        Background::Transparent => [
+            clamp(255.0 * c[0]),
+            clamp(255.0 * c[1]),
+            clamp(255.0 * c[2]),
+            clamp(255.0 * (1.0 - v)),
+        ],
+    }
+}
+
+/// The derived bound (`docs/layout.md`, "Integer resolve: error bound") on
+/// `|rgba8 - exact|` per channel, in bytes, for a background in `[0, 1]`: half a step of
+/// output rounding plus the accumulated error of the products, in 1/128 byte.
+///
+/// With `V_j` the exact visibility in front of row `j`, `P(i, j)` the product of `t_k / 255`
+/// for `i < k < j`, and `F_i = eps(t_i) + 1/2` the largest fresh error of the visibility step
+/// of row `i` (`eps(t) = 32768 t / 255 - floor(257 t / 2)`, in `[0, 1]`):
+///
+/// ```text
+/// E_0 = 0,  E_(j+1) = (t_j / 255) E_j + F_j                 (|v_j - 32767 V_j| <= E_j)
+/// color: sum_j (1/2 + c_j V_j / 256) + sum_i F_i R_i  [+ k V_M + 1/2 + 0.504]
+///         R_i = sum_(j>i) (c_j / 256) P(i, j)  [+ k P(i, M)],  k = 32640 bg / 32768
+/// alpha: 1/2 + (32640 / 32768) (1 - V_M + E_M)
+/// ```
+pub fn bound(rows: &[Row], bg: Background) -> [f64; 4] {
+    let m = rows.len();
+    let bytes: Vec<[f64; 4]> = rows.iter().map(|r| r.rgbt().map(f64::from)).collect();
+    let eps = |t: f64| 32768.0 * t / 255.0 - (257.0 * t / 2.0).floor();
+    let f: Vec<f64> = bytes.iter().map(|b| eps(b[3]) + 0.5).collect();
+    // Exact visibilities in front of each row, and the a-priori bound on the error of v.
+    let mut vis = vec![1.0f64];
+    let mut e = vec![0.0f64];
+    for (j, b) in bytes.iter().enumerate() {
+        vis.push(vis[j] * b[3] / 255.0);
+        e.push(b[3] / 255.0 * e[j] + f[j]);
+    }
+    // P(i, j) = prod_(i<k<j) t_k / 255.
+    let p = |i: usize, j: usize| ((i + 1)..j).map(|k| bytes[k][3] / 255.0).product::<f64>();
+    let k = match bg {
+        Background::Opaque(b) => Some(b.to_array().map(|x| 32640.0 * f64::from(x) / 32768.0)),
+        Background::Transparent => None,
+    };
+    let mut out = [0.0f64; 4];
+    for ch in 0..3 {
+        let mut steps = 0.0;
+        for j in 0..m {
+            steps += 0.5 + bytes[j][ch] / 256.0 * vis[j];
+        }
+        for i in 0..m {
+            let mut r: f64 = ((i + 1)..m).map(|j| bytes[j][ch] / 256.0 * p(i, j)).sum();
+            if let Some(k) = k {
+                r += k[ch] * p(i, m);
+            }
+            steps += f[i] * r;
+        }
+        if let Some(k) = k {
+            steps += k[ch] * vis[m] + 0.5 + 0.504;
+        }
+        out[ch] = 0.5 + steps / 128.0;
+    }
+    out[3] = match k {
+        Some(_) => 0.0,
+        None => 0.5 + (0.5 + 32640.0 / 32768.0 * (1.0 - vis[m] + e[m])) / 128.0,
+    };
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mlab::glam::Vec3;
+
+    #[test]
+    fn documented_examples() {
+        // docs/layout.md: an empty pixel is the background, a byte background exactly.
+        for k in 0..=255u8 {
+            let b = f32::from(k) / 255.0;
+            assert_eq!(rgba8(&[], Background::Opaque(Vec3::splat(b))), [k, k, k, 255]);
+        }
+        assert_eq!(rgba8(&[Row::EMPTY; 3], Background::Transparent), [0, 0, 0, 0]);
+        // One opaque row: its bytes, whatever the background.
+        let r = Row::new([200, 7, 0], 0, 1.0);
+        assert_eq!(rgba8(&[r], Background::Opaque(Vec3::ONE)), [200, 7, 0, 255]);
+        assert_eq!(rgba8(&[r], Background::Transparent), [200, 7, 0, 255]);
+        assert_eq!(background_channel(f32::NAN), 0);
+        assert_eq!(background_channel(2.0), 32640);
+    }
+}

@@ -1,0 +1,167 @@
+//! The integer RGBA8 resolve (what `Framebuffer::resolve_rgba8` writes for MLAB;
+//! `docs/layout.md`, "Integer resolve") against the plain reference formula of
+//! `mlab-reference` (`resolve_int`, written from the docs in `u64` with plain division), byte
+//! for byte, through every MLAB framebuffer (pixel-major, spans, run-time sized; whole and
+//! partial spans), and against the exact composite of the rows within the derived bound.
+//!
+//! Sizes (debug builds, CI): every single row (each channel sees every `(color, T)` pair:
+//! 65,536 rows) over five backgrounds; at M = 2 every `(T_front, C_back)` pair of each channel
+//! with the front color and back transmittance drawn from a fixed hash (65,536 pixels per
+//! seed, 4 seeds: the full 2^32 pairs of rows, or 2^24 per channel, would take minutes);
+//! arbitrary rows at M = 1, 2, 3, 4, 8 for the bound. About 2 s in a debug build.
+
+use mlab::glam::Vec3;
+use mlab::{Background, DynFramebuffer, Framebuffer, Layers, MlabFramebuffer, Row, SpanFramebuffer};
+use mlab_reference::{Rng, resolve_int};
+
+const BACKGROUNDS: [Background; 5] = [
+    Background::Transparent,
+    Background::Opaque(Vec3::new(0.2, 0.5, 1.0)),
+    Background::Opaque(Vec3::ZERO),
+    Background::Opaque(Vec3::ONE),
+    // Not a color: clamped (NaN to 0), as to_rgba8 clamps.
+    Background::Opaque(Vec3::new(f32::NAN, f32::INFINITY, -1.0)),
+];
+
+/// `pixels[i]` (M rows each, row-major `w` wide) resolved by the pixel-major, the span and
+/// the run-time-sized framebuffer; each output checked against the reference, and (for a
+/// background in `[0, 1]`) the reference against the exact composite within the bound.
+fn check<const M: usize>(pixels: &[[Row; M]], w: u32) {
+    let h = (pixels.len() as u32).div_ceil(w);
+    assert_eq!(pixels.len(), (w * h) as usize);
+    let n = pixels.len();
+    let mut pm: Vec<Row> = pixels.iter().flatten().copied().collect();
+    let pm = MlabFramebuffer::<M>::new(&mut pm, w, h).expect("size");
+    let mut st = vec![Row::EMPTY; SpanFramebuffer::<M>::rows_needed(w, h).expect("size")];
+    let mut sp = SpanFramebuffer::<M>::new(&mut st, w, h).expect("size");
+    sp.copy_from(&pm).expect("same size");
+    let mut dst = vec![Row::EMPTY; Layers::Mlab(M).rows_needed(w, h).expect("size")];
+    dst.copy_from_slice(sp.as_rows());
+    let dy: DynFramebuffer = DynFramebuffer::new(Layers::Mlab(M), &mut dst, w, h).expect("size");
+    let mut worst = 0.0f64;
+    for bg in BACKGROUNDS {
+        let want: Vec<[u8; 4]> = pixels.iter().map(|p| resolve_int::rgba8(p, bg)).collect();
+        for (name, fb) in [("pixel-major", &pm as &dyn Rgba8), ("spans", &sp), ("dyn", &dy)] {
+            let got = fb.rgba8(n, bg);
+            if let Some(i) = (0..n).find(|&i| got[i] != want[i]) {
+                panic!(
+                    "M = {M} {name} {bg:?} pixel {i} {:?}: {:?}, reference {:?}",
+                    pixels[i], got[i], want[i]
+                );
+            }
+        }
+        let in_range = match bg {
+            Background::Opaque(c) => c.to_array().iter().all(|x| (0.0..=1.0).contains(x)),
+            Background::Transparent => true,
+        };
+        if in_range {
+            for (p, w) in pixels.iter().zip(&want) {
+                let exact = resolve_int::exact(p, bg);
+                let bound = resolve_int::bound(p, bg);
+                for ch in 0..4 {
+                    let err = (f64::from(w[ch]) - exact[ch]).abs();
+                    assert!(
+                        err <= bound[ch] + 1e-9,
+                        "M = {M} {bg:?} {p:?} channel {ch}: {} vs exact {} (bound {})",
+                        w[ch],
+                        exact[ch],
+                        bound[ch]
+                    );
+                    worst = worst.max(err - 0.5);
+                }
+            }
+        }
+    }
+    // The bound leaves room: the largest error beyond the output's half step, for the record.
+    eprintln!("M = {M}: {n} pixels, largest error beyond 1/2 step {worst:.4} byte");
+}
+
+/// A whole-frame RGBA8 resolve of any framebuffer (object-safe for the loop above).
+trait Rgba8 {
+    fn rgba8(&self, n: usize, bg: Background) -> Vec<[u8; 4]>;
+}
+impl<F: Framebuffer> Rgba8 for F {
+    fn rgba8(&self, n: usize, bg: Background) -> Vec<[u8; 4]> {
+        let mut out = vec![[0u8; 4]; n];
+        self.resolve_rgba8(&mut out, bg).expect("size");
+        // Span by span the same bytes (the last span's lanes past the edge dropped).
+        let w = self.width() as usize;
+        for (y, line) in out.chunks_exact(w).enumerate() {
+            for (s, px) in line.chunks(8).enumerate() {
+                let span = self.resolve_span_rgba8(s as u32, y as u32, bg);
+                assert_eq!(px, &span[..px.len()], "span {s} of line {y}");
+            }
+        }
+        out
+    }
+}
+
+/// Every single row: each channel sees every (color, T) pair (R = c, G = 255 - c,
+/// B = c ^ 0xa5), 256 x 256 pixels.
+#[test]
+fn every_single_row() {
+    let pixels: Vec<[Row; 1]> = (0..65536u32)
+        .map(|i| {
+            let (c, t) = ((i & 255) as u8, (i >> 8) as u8);
+            [Row::new([c, 255 - c, c ^ 0xa5], t, 1.0)]
+        })
+        .collect();
+    check::<1>(&pixels, 256);
+}
+
+/// M = 2: every (T_front, C_back) pair of each channel, the front color and the back
+/// transmittance from a fixed hash, four seeds; and every row behind an empty one.
+#[test]
+fn pairs_of_rows() {
+    for seed in 0..4u64 {
+        let mut rng = Rng(0x22 + seed);
+        let pixels: Vec<[Row; 2]> = (0..65536u32)
+            .map(|i| {
+                let (c, t) = ((i & 255) as u8, (i >> 8) as u8);
+                let x = rng.next_u64();
+                let front = Row::new([x as u8, (x >> 8) as u8, (x >> 16) as u8], t, 1.0);
+                let back = Row::new([c, 255 - c, c ^ 0x3c], (x >> 24) as u8, 2.0);
+                [front, back]
+            })
+            .collect();
+        check::<2>(&pixels, 256);
+    }
+    let behind_empty: Vec<[Row; 2]> = (0..65536u32)
+        .map(|i| [Row::EMPTY, Row::new([i as u8, (i >> 8) as u8, 0], (i >> 8) as u8, 1.0)])
+        .collect();
+    check::<2>(&behind_empty, 256);
+}
+
+/// Arbitrary row bytes (depth bytes too: NaN depths, unsorted rows), widths that are not
+/// multiples of 8 (partial last spans), M = 1, 2, 3, 4, 8.
+#[test]
+fn arbitrary_rows_within_the_bound() {
+    fn run<const M: usize>(rng: &mut Rng, w: u32, h: u32) {
+        let pixels: Vec<[Row; M]> = (0..w * h)
+            .map(|_| {
+                core::array::from_fn(|_| {
+                    let x = rng.next_u64();
+                    match x % 8 {
+                        0 => Row::EMPTY,
+                        1 => Row::new([x as u8, (x >> 8) as u8, (x >> 16) as u8], 0, 1.0),
+                        // A fragment-like row: color at most the coverage.
+                        2..=4 => {
+                            let t = (x >> 24) as u8;
+                            let cov = 255 - u32::from(t);
+                            let c = |s: u32| ((((x >> s) & 255) as u32 * cov) / 255) as u8;
+                            Row::new([c(32), c(40), c(48)], t, 1.0)
+                        }
+                        _ => Row::from_bytes(x.to_le_bytes()),
+                    }
+                })
+            })
+            .collect();
+        check::<M>(&pixels, w);
+    }
+    let mut rng = Rng(2222);
+    run::<1>(&mut rng, 13, 40);
+    run::<2>(&mut rng, 67, 11);
+    run::<3>(&mut rng, 21, 7);
+    run::<4>(&mut rng, 130, 17);
+    run::<8>(&mut rng, 45, 9);
+}
