@@ -1,6 +1,7 @@
 //! Fragments in, PNG out, on the GPU: the rasterizer example's transparent torus
-//! (`examples/common/raster.rs` of the kernel) composited by [`mlab_gpu::Compositor`], resolved
-//! by the kernel, and checked against the CPU kernel on the same fragments: the rows and the
+//! (`examples/common/raster.rs` of the kernel) composited by [`mlab_gpu::Compositor`] and, for
+//! MLAB, resolved to RGBA8 on the GPU by the kernel's integer resolve (HT: by the CPU kernel, whose
+//! HT RGBA8 is f32), and checked against the CPU kernel on the same fragments: the rows and the
 //! RGBA8 image are compared byte for byte.
 //!
 //! ```sh
@@ -54,7 +55,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let cpu_words = cpu::composite(layers, arith, Layout::Spans, W, H, &fragments)?;
 
     let background = Background::Opaque(mlab::glam::Vec3::new(0.9, 0.9, 0.85));
-    let image = resolve(layers, arith, &words, background)?;
+    // MLAB: the integer RGBA8 resolve on the GPU; HT: the kernel's (f32) resolve of the GPU's rows.
+    let image = match layers {
+        Layers::Mlab(_) => compositor.composite_rgba8(W, H, &fragments, background)?.1,
+        Layers::Hybrid(_) => resolve(layers, arith, &words, background)?,
+    };
     let cpu_image = resolve(layers, arith, &cpu_words, background)?;
     println!(
         "{layers:?} {arith:?} on {} ({}): {} fragments; rows {} the CPU's, RGBA8 {}",

@@ -3,7 +3,7 @@
 use crate::cpu::{slots, validate};
 use crate::{Arith, GpuError, wgsl};
 use bytemuck::{Pod, Zeroable};
-use mlab::Layers;
+use mlab::{Background, Layers};
 use wgpu::util::DeviceExt;
 
 /// One fragment for [`Compositor::composite`]: its pixel (`y * width + x`), premultiplied linear
@@ -111,6 +111,8 @@ pub struct Compositor {
     device: wgpu::Device,
     queue: wgpu::Queue,
     pipeline: wgpu::ComputePipeline,
+    /// The integer RGBA8 resolve (MLAB only).
+    resolve: Option<wgpu::ComputePipeline>,
     layers: Layers,
     layout: Layout,
     source: String,
@@ -126,6 +128,46 @@ struct Params {
     pitch: u32,
     spans: u32,
     first: u32,
+    width: u32,
+    line: u32,
+    pad: [u32; 2],
+    background: [u32; 4],
+}
+
+/// The background channels as the kernel's integer resolve quantizes them
+/// (`docs/layout.md`, "Integer resolve": `b` clamped to `[0, 1]`, NaN to 0, then
+/// `floor(b * 32640 + 0.5)` in f32, a multiply and then an add), with `1` in the fourth slot for
+/// an opaque background; `[0, 0, 0, 0]` for [`Background::Transparent`]. Computed on the CPU:
+/// the shader receives integers. (An FMA would not change this step: every f32 in `[0, 1]`
+/// gives the same value fused, `docs/gpu.md`.)
+pub fn background_q15(background: Background) -> [u32; 4] {
+    match background {
+        Background::Opaque(c) => {
+            let q = |b: f32| {
+                let b = if b > 1.0 { 1.0 } else { b };
+                let b = if b >= 0.0 { b } else { 0.0 };
+                #[expect(
+                    clippy::cast_possible_truncation,
+                    clippy::cast_sign_loss,
+                    reason = "b in [0, 1]: b * 32640 + 0.5 in [0.5, 32640.5], truncated as specified"
+                )]
+                let v = (b * 32640.0 + 0.5) as u32;
+                v
+            };
+            [q(c.x), q(c.y), q(c.z), 1]
+        }
+        Background::Transparent => [0; 4],
+    }
+}
+
+/// One band's dispatch input.
+struct Band<'a> {
+    offsets: &'a [u32],
+    fragments: &'a [u32],
+    pixels: u32,
+    width: u32,
+    line: u32,
+    background: Option<[u32; 4]>,
 }
 
 impl Compositor {
@@ -133,21 +175,25 @@ impl Compositor {
     pub fn new(gpu: &Gpu, layers: Layers, arith: Arith, layout: Layout) -> Result<Compositor, GpuError> {
         let source = wgsl::compositor(layers, arith)?;
         let device = &gpu.device;
-        let pipeline = scoped(
+        let (pipeline, resolve) = scoped(
             device,
             || {
                 let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some("mlab-gpu composite"),
                     source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
                 });
-                device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some("mlab-gpu composite"),
-                    layout: None,
-                    module: &module,
-                    entry_point: Some("composite"),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
+                let entry = |name| {
+                    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(name),
+                        layout: None,
+                        module: &module,
+                        entry_point: Some(name),
+                        compilation_options: Default::default(),
+                        cache: None,
+                    })
+                };
+                let resolve = matches!(layers, Layers::Mlab(_)).then(|| entry("resolve"));
+                (entry("composite"), resolve)
             },
             GpuError::Shader,
         )?;
@@ -156,6 +202,7 @@ impl Compositor {
             device: device.clone(),
             queue: gpu.queue.clone(),
             pipeline,
+            resolve,
             layers,
             layout,
             source,
@@ -191,6 +238,36 @@ impl Compositor {
     /// pixel (a stable counting sort: submission order kept within a pixel); the GPU runs one
     /// invocation per stored pixel. Memory: see `docs/gpu.md`.
     pub fn composite(&self, width: u32, height: u32, fragments: &[GpuFragment]) -> Result<Vec<u32>, GpuError> {
+        self.run(width, height, fragments, None).map(|(words, _)| words)
+    }
+
+    /// [`composite`](Self::composite), then the kernel's integer RGBA8 resolve on the GPU
+    /// (`docs/layout.md`, "Integer resolve", what `Framebuffer::resolve_rgba8` writes for
+    /// MLAB) over `background`: the storage words and the image, `width * height` pixels,
+    /// row-major. MLAB only: HT's RGBA8 is the kernel's f32 resolve, which a shader cannot
+    /// promise to reproduce (`GpuError::NoIntegerResolve`; resolve the returned words with the
+    /// CPU kernel instead).
+    pub fn composite_rgba8(
+        &self,
+        width: u32,
+        height: u32,
+        fragments: &[GpuFragment],
+        background: Background,
+    ) -> Result<(Vec<u32>, Vec<[u8; 4]>), GpuError> {
+        if self.resolve.is_none() {
+            return Err(GpuError::NoIntegerResolve(self.layers));
+        }
+        let (words, image) = self.run(width, height, fragments, Some(background_q15(background)))?;
+        Ok((words, image.into_iter().map(u32::to_le_bytes).collect()))
+    }
+
+    fn run(
+        &self,
+        width: u32,
+        height: u32,
+        fragments: &[GpuFragment],
+        background: Option<[u32; 4]>,
+    ) -> Result<(Vec<u32>, Vec<u32>), GpuError> {
         let too_large = GpuError::FrameTooLarge { width, height };
         let pixels = width.checked_mul(height).ok_or(too_large.clone())?;
         // Stored pixels per line: spans pad each line to a multiple of 8.
@@ -208,8 +285,8 @@ impl Compositor {
         if stored == 0 {
             // Nothing stored; still every fragment must be valid (none can be: no pixel).
             return match fragments.first() {
-                Some(f) => validate(0, f, 0).map(|_| Vec::new()),
-                None => Ok(Vec::new()),
+                Some(f) => validate(0, f, 0).map(|_| (Vec::new(), Vec::new())),
+                None => Ok((Vec::new(), Vec::new())),
             };
         }
         // Stable counting sort by stored pixel, after validation.
@@ -236,6 +313,7 @@ impl Compositor {
         let slots = slots(self.layers) as u64;
         let line_bytes = u64::from(pitch) * slots * 8;
         let mut words = Vec::with_capacity((u64::from(stored) * slots * 2) as usize);
+        let mut image = Vec::new();
         let mut y0 = 0u32;
         while y0 < height {
             let mut y1 = y0;
@@ -259,14 +337,31 @@ impl Compositor {
             let base = offsets[p0];
             let band_offsets: Vec<u32> = offsets[p0..=p1].iter().map(|o| o - base).collect();
             let band_fragments = &sorted[5 * base as usize..5 * offsets[p1] as usize];
-            words.extend(self.band(&band_offsets, band_fragments, (p1 - p0) as u32)?);
+            let (w, i) = self.band(&Band {
+                offsets: &band_offsets,
+                fragments: band_fragments,
+                pixels: (p1 - p0) as u32,
+                width,
+                line: pitch,
+                background,
+            })?;
+            words.extend(w);
+            image.extend(i);
             y0 = y1;
         }
-        Ok(words)
+        Ok((words, image))
     }
 
     /// One dispatch over `pixels` stored pixels.
-    fn band(&self, offsets: &[u32], fragments: &[u32], pixels: u32) -> Result<Vec<u32>, GpuError> {
+    fn band(&self, band: &Band) -> Result<(Vec<u32>, Vec<u32>), GpuError> {
+        let Band {
+            offsets,
+            fragments,
+            pixels,
+            width,
+            line,
+            background,
+        } = *band;
         let device = &self.device;
         let groups = pixels.div_ceil(WORKGROUP);
         let gx = groups.clamp(1, self.max_groups);
@@ -279,7 +374,14 @@ impl Compositor {
             pitch: gx * WORKGROUP,
             spans: u32::from(self.layout == Layout::Spans),
             first: pass * CHUNK,
+            width,
+            line,
+            pad: [0; 2],
+            background: background.unwrap_or([0; 4]),
         };
+        // RGBA8 pixels of the band: its lines times the width (at least one word: no empty
+        // binding).
+        let image_bytes = u64::from(pixels / line.max(1)) * u64::from(width) * 4;
         let out_bytes = u64::from(pixels) * slots(self.layers) as u64 * 8;
         // A binding may not be empty: a band without fragments binds one unused fragment.
         let placeholder = [0u32; 5];
@@ -339,32 +441,92 @@ impl Compositor {
                 pass.set_bind_group(0, &bind, &[]);
                 pass.dispatch_workgroups(gx, gy, 1);
             }
+            let image = match (&self.resolve, background) {
+                (Some(resolve), Some(_)) => {
+                    let params = init("params", bytemuck::bytes_of(&params(0)), wgpu::BufferUsages::UNIFORM);
+                    let image = device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("image"),
+                        size: image_bytes.max(4),
+                        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                        mapped_at_creation: false,
+                    });
+                    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("mlab-gpu resolve"),
+                        layout: &resolve.get_bind_group_layout(0),
+                        entries: &[
+                            wgpu::BindGroupEntry {
+                                binding: 0,
+                                resource: params.as_entire_binding(),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 3,
+                                resource: rows.as_entire_binding(),
+                            },
+                            wgpu::BindGroupEntry {
+                                binding: 4,
+                                resource: image.as_entire_binding(),
+                            },
+                        ],
+                    });
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("mlab-gpu resolve"),
+                        timestamp_writes: None,
+                    });
+                    pass.set_pipeline(resolve);
+                    pass.set_bind_group(0, &bind, &[]);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                    drop(pass);
+                    let back = device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("image readback"),
+                        size: image_bytes.max(4),
+                        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    });
+                    encoder.copy_buffer_to_buffer(&image, 0, &back, 0, image_bytes.max(4));
+                    Some(back)
+                }
+                _ => None,
+            };
             encoder.copy_buffer_to_buffer(&rows, 0, &readback, 0, out_bytes);
             self.queue.submit([encoder.finish()]);
-            readback
+            (readback, image)
         };
-        let readback = scoped(device, make, GpuError::Device)?;
-        let slice = readback.slice(..);
-        let (tx, rx) = std::sync::mpsc::channel();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            // The receiver waits below; a send error cannot happen while it does.
-            let _ = tx.send(r);
-        });
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| GpuError::Device(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| GpuError::Device(e.to_string()))?
-            .map_err(|e| GpuError::Device(e.to_string()))?;
-        let view = slice.get_mapped_range().map_err(|e| GpuError::Device(e.to_string()))?;
-        let words = view
-            .chunks_exact(4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
-        drop(view);
-        readback.unmap();
-        Ok(words)
+        let (readback, image) = scoped(device, make, GpuError::Device)?;
+        let words = read(device, &readback)?;
+        let image = match image {
+            Some(buffer) => {
+                let mut words = read(device, &buffer)?;
+                words.truncate((image_bytes / 4) as usize);
+                words
+            }
+            None => Vec::new(),
+        };
+        Ok((words, image))
     }
+}
+
+/// The words of a `MAP_READ` buffer, after the queue's work.
+fn read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u32>, GpuError> {
+    let slice = buffer.slice(..);
+    let (tx, rx) = std::sync::mpsc::channel();
+    slice.map_async(wgpu::MapMode::Read, move |r| {
+        // The receiver waits below; a send error cannot happen while it does.
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| GpuError::Device(e.to_string()))?
+        .map_err(|e| GpuError::Device(e.to_string()))?;
+    let view = slice.get_mapped_range().map_err(|e| GpuError::Device(e.to_string()))?;
+    let words = view
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    drop(view);
+    buffer.unmap();
+    Ok(words)
 }
 
 /// Runs `f` inside validation and out-of-memory error scopes: the first error is returned

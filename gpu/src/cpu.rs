@@ -2,7 +2,9 @@
 //! fallback that gives the same bytes.
 
 use crate::{Arith, GpuError, GpuFragment, Layout};
-use mlab::{Arithmetic, DynFramebuffer, Fragment, Framebuffer, FramebufferError, Layers, Paper, Row, Unbiased};
+use mlab::{
+    Arithmetic, Background, DynFramebuffer, Fragment, Framebuffer, FramebufferError, Layers, Paper, Row, Unbiased,
+};
 
 /// Validates a fragment as the compositor does.
 pub(crate) fn validate(index: usize, f: &GpuFragment, pixels: u32) -> Result<Fragment, GpuError> {
@@ -84,4 +86,29 @@ pub(crate) const fn slots(layers: Layers) -> usize {
         Layers::Mlab(m) => m,
         Layers::Hybrid(k) => k + 1,
     }
+}
+
+/// The kernel's `Framebuffer::resolve_rgba8` of the framebuffer [`composite`] builds (the
+/// integer resolve for MLAB): `width * height` pixels, row-major.
+pub fn resolve_rgba8(
+    layers: Layers,
+    arith: Arith,
+    width: u32,
+    height: u32,
+    fragments: &[GpuFragment],
+    background: Background,
+) -> Result<Vec<[u8; 4]>, GpuError> {
+    let err = |e| framebuffer_error(layers, width, height, e);
+    let words = composite(layers, arith, Layout::Spans, width, height, fragments)?;
+    let mut rows: Vec<Row> = words.chunks_exact(2).map(|w| Row::from_words([w[0], w[1]])).collect();
+    let mut out = vec![[0u8; 4]; (width as usize) * (height as usize)];
+    match arith {
+        Arith::Paper => DynFramebuffer::<Paper>::new(layers, &mut rows, width, height)
+            .and_then(|fb| fb.resolve_rgba8(&mut out, background))
+            .map_err(err)?,
+        Arith::Unbiased => DynFramebuffer::<Unbiased>::new(layers, &mut rows, width, height)
+            .and_then(|fb| fb.resolve_rgba8(&mut out, background))
+            .map_err(err)?,
+    }
+    Ok(out)
 }

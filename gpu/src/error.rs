@@ -53,6 +53,9 @@ pub enum GpuError {
         /// Why.
         error: FragmentError,
     },
+    /// An RGBA8 resolve on the GPU was asked of a method without an integer resolve (HT: its
+    /// RGBA8 is the kernel's f32 resolve).
+    NoIntegerResolve(Layers),
     /// The shader or pipeline was refused (wgpu's validation message).
     Shader(String),
     /// The device failed while compositing (out of memory, device lost, mapping failed:
@@ -75,6 +78,7 @@ impl core::fmt::Display for GpuError {
                 write!(f, "fragment {index}: pixel {pixel} outside the frame ({pixels} pixels)")
             }
             GpuError::Fragment { index, error } => write!(f, "fragment {index}: {error}"),
+            GpuError::NoIntegerResolve(l) => write!(f, "{l:?} has no integer RGBA8 resolve"),
             GpuError::Shader(m) => write!(f, "shader refused: {m}"),
             GpuError::Device(m) => write!(f, "device error: {m}"),
         }

@@ -36,10 +36,11 @@ use mlab::Layers;
 
 /// The functions shared by every method: depth test, dithers, the exact f32 emulation,
 /// quantization (`mlab_quantize_paper`, `mlab_quantize_unbiased`), merges (`mlab_merge_paper`,
-/// `mlab_merge_unbiased`) and tail adds (`mlab_tail_add_paper`, `mlab_tail_add_wide`).
+/// `mlab_merge_unbiased`), tail adds (`mlab_tail_add_paper`, `mlab_tail_add_wide`) and the
+/// integer resolve's `mlab_q15` and `mlab_resolve_pixel`.
 pub const KERNEL: &str = include_str!("wgsl/kernel.wgsl");
 
-/// Listing 1 (`mlab_insert`); needs `MLAB_M`, `mlab_merge` and [`KERNEL`] ([`mlab()`] has them all).
+/// Listing 1 (`mlab_insert`) and the integer RGBA8 resolve (`mlab_resolve_rgba8`); needs `MLAB_M`, `mlab_merge` and [`KERNEL`] ([`mlab()`] has them all).
 pub const MLAB_INSERT: &str = include_str!("wgsl/mlab.wgsl");
 
 /// Listing 2 (`ht_insert`); needs `HT_K`, `ht_tail_add` and [`KERNEL`] ([`hybrid()`] has them all).
@@ -49,6 +50,7 @@ pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
 const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");
 const COMPOSITE_MLAB: &str = include_str!("wgsl/composite_mlab.wgsl");
 const COMPOSITE_HT: &str = include_str!("wgsl/composite_ht.wgsl");
+const COMPOSITE_RESOLVE: &str = include_str!("wgsl/composite_resolve.wgsl");
 
 fn check_size(layers: Layers) -> Result<(), GpuError> {
     let (Layers::Mlab(n) | Layers::Hybrid(n)) = layers;
@@ -60,7 +62,8 @@ fn check_size(layers: Layers) -> Result<(), GpuError> {
 }
 
 /// MLAB with `m` rows in the arithmetic `arith`: [`KERNEL`], then `const MLAB_M`,
-/// `mlab_merge` and `mlab_quantize` (the arithmetic's), then [`MLAB_INSERT`]. `m` is one of
+/// `mlab_merge` and `mlab_quantize` (the arithmetic's), then [`MLAB_INSERT`] (`mlab_insert`,
+/// and `mlab_resolve_rgba8`, the kernel's integer RGBA8 resolve). `m` is one of
 /// [`Layers::SIZES`] (the kernel's run-time sizes, 1..=8).
 pub fn mlab(m: usize, arith: Arith) -> Result<String, GpuError> {
     check_size(Layers::Mlab(m))?;
@@ -95,7 +98,7 @@ pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
 /// that [`crate::Compositor`] compiles ([`crate::Compositor::source`]).
 pub fn compositor(layers: Layers, arith: Arith) -> Result<String, GpuError> {
     Ok(match layers {
-        Layers::Mlab(m) => format!("{}\n{COMPOSITE}{COMPOSITE_MLAB}", mlab(m, arith)?),
+        Layers::Mlab(m) => format!("{}\n{COMPOSITE}{COMPOSITE_MLAB}{COMPOSITE_RESOLVE}", mlab(m, arith)?),
         Layers::Hybrid(k) => format!("{}\n{COMPOSITE}{COMPOSITE_HT}", hybrid(k, arith)?),
     })
 }

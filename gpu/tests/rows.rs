@@ -5,7 +5,8 @@
 mod common;
 
 use common::{Rng, gpu};
-use mlab::{FragmentError, Layers};
+use mlab::glam::Vec3;
+use mlab::{Background, FragmentError, Layers};
 use mlab_gpu::{Arith, Compositor, GpuError, GpuFragment, Layout, cpu, wgsl};
 
 fn all_layers() -> impl Iterator<Item = Layers> {
@@ -381,4 +382,53 @@ fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
             check(&c, layers, arith, Layout::Spans, w, h, &frags);
         }
     }
+}
+
+#[test]
+fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
+    let Some(gpu) = gpu("rgba8") else { return };
+    let mut rng = Rng(0x5247_4241);
+    let backgrounds = [
+        Background::Transparent,
+        Background::Opaque(Vec3::new(0.9, 0.9, 0.85)),
+        Background::Opaque(Vec3::new(0.0, 1.0, 128.0 / 255.0)),
+        Background::Opaque(Vec3::new(f32::NAN, -1.0, 2.0)),
+        Background::Opaque(Vec3::new(1e-40, 0.5 / 255.0, f32::INFINITY)),
+    ];
+    let mut total = 0;
+    for m in Layers::SIZES {
+        for arith in Arith::ALL {
+            for layout in [Layout::Spans, Layout::PixelMajor] {
+                let c = Compositor::new(&gpu, Layers::Mlab(m), arith, layout).expect("compositor");
+                for (w, h, n) in [(37, 11, 6_000), (8, 2, 800), (1, 1, 50)] {
+                    let frags = random_stream(&mut rng, w, h, n);
+                    let bg = backgrounds[rng.below(backgrounds.len() as u32) as usize];
+                    let (words, image) = c.composite_rgba8(w, h, &frags, bg).expect("gpu");
+                    assert_eq!(words, c.composite(w, h, &frags).expect("gpu rows"));
+                    let want = cpu::resolve_rgba8(Layers::Mlab(m), arith, w, h, &frags, bg).expect("cpu");
+                    assert_eq!(image.len(), want.len());
+                    if let Some(i) = (0..image.len()).find(|&i| image[i] != want[i]) {
+                        panic!(
+                            "M = {m} {arith:?} {layout:?} {w}x{h} {bg:?}: pixel {i}: gpu {:?}, cpu {:?}",
+                            image[i], want[i]
+                        );
+                    }
+                    total += n;
+                }
+            }
+        }
+    }
+    println!("rgba8: {total} fragments, identical images");
+    // Bands give the same image; HT has no integer resolve.
+    let frags = random_stream(&mut rng, 30, 40, 20_000);
+    let bg = Background::Opaque(Vec3::new(0.2, 0.4, 0.6));
+    let mut c = Compositor::new(&gpu, Layers::Mlab(4), Arith::Unbiased, Layout::Spans).expect("compositor");
+    let whole = c.composite_rgba8(30, 40, &frags, bg).expect("one band");
+    c.set_max_binding_bytes(16384);
+    assert_eq!(c.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
+    let ht = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, Layout::Spans).expect("compositor");
+    assert_eq!(
+        ht.composite_rgba8(2, 2, &[], bg),
+        Err(GpuError::NoIntegerResolve(Layers::Hybrid(3)))
+    );
 }

@@ -7,6 +7,7 @@
 //   2 storage, read    fragments: array<u32>, 5 words per fragment: bits of premultiplied
 //                      R, G, B, alpha, depth (f32)
 //   3 storage, rw      rows: array<vec2<u32>>, the framebuffer's storage (Row::words)
+//   4 storage, rw      image: array<u32>, RGBA8 pixels (entry point `resolve`, MLAB only)
 struct CompositeParams {
     // Stored pixels in this dispatch (padding lanes of spans included).
     pixels: u32,
@@ -17,6 +18,14 @@ struct CompositeParams {
     // This dispatch inserts fragments first .. first + COMPOSITE_CHUNK of each pixel; 0 starts
     // from empty rows, later dispatches load the rows the previous one stored.
     first: u32,
+    // Image width, and stored pixels per line (the width, or 8 * ceil(width / 8) for spans).
+    width: u32,
+    line: u32,
+    pad0: u32,
+    pad1: u32,
+    // The background for `resolve`: three channels as mlab_gpu::background_q15 gives them, and
+    // w = 1 (opaque) or 0 (Background::Transparent).
+    background: vec4<u32>,
 }
 
 // Fragments per pixel per dispatch. Mesa's llvmpipe (lavapipe) ends an invocation's loops after

@@ -202,3 +202,22 @@ fn mlab_tail_add_wide(tail: vec2<u32>, row: vec2<u32>) -> vec2<u32> {
     let n = min((tail.y >> 21u) + 1u, 2047u);
     return vec2<u32>(r | (g << 13u) | (b << 26u), (b >> 6u) | (a << 7u) | (n << 21u));
 }
+
+// The rounded Q15 product (x * y + 16384) >> 15 of the integer resolve, x, y <= 32767.
+fn mlab_q15(x: u32, y: u32) -> u32 {
+    return (x * y + 16384u) >> 15u;
+}
+
+// The integer RGBA8 resolve's last step (docs/layout.md, "Integer resolve"): from the three
+// accumulators and the Q15 visibility to R | G << 8 | B << 16 | A << 24. `bg`: the background's
+// three channels as the kernel quantizes them (mlab_gpu::background_q15, computed on the CPU)
+// and w = 1 for an opaque background, w = 0 for Background::Transparent (premultiplied output).
+fn mlab_resolve_pixel(acc: vec3<u32>, v: u32, bg: vec4<u32>) -> u32 {
+    if (bg.w != 0u) {
+        let c = min(acc + vec3<u32>(mlab_q15(bg.x, v), mlab_q15(bg.y, v), mlab_q15(bg.z, v)), vec3<u32>(32767u)) >> vec3<u32>(7u);
+        return c.x | (c.y << 8u) | (c.z << 16u) | (255u << 24u);
+    }
+    let c = acc >> vec3<u32>(7u);
+    let a = (mlab_q15(32767u - v, 32640u) + 64u) >> 7u;
+    return c.x | (c.y << 8u) | (c.z << 16u) | (a << 24u);
+}
