@@ -130,6 +130,28 @@ fn a_fused_multiply_add_changes_bytes_of_faint_fragments_only() {
     }
 }
 
+/// The integer resolve's background step `floor(b * 32640 + 0.5)` (`docs/layout.md`,
+/// `mlab_gpu::background_q15`), separately rounded and fused.
+#[expect(
+    clippy::cast_possible_truncation,
+    clippy::cast_sign_loss,
+    reason = "the kernel's cast"
+)]
+fn background_differs(b: f32) -> bool {
+    (b * 32640.0 + 0.5) as u32 != b.mul_add(32640.0, 0.5) as u32
+}
+
+#[test]
+fn the_resolves_background_step_is_the_same_with_an_fma_for_every_f32_in_0_1() {
+    let end = 1.0f32.to_bits() + 1;
+    let count = |a: u32, b: u32| (a..b).filter(|&bits| background_differs(f32::from_bits(bits))).count();
+    let differ = std::thread::scope(|s| {
+        let first = s.spawn(|| count(0, end / 2));
+        count(end / 2, end) + first.join().expect("scan thread")
+    });
+    assert_eq!(differ, 0, "an FMA changes the background's Q15 value");
+}
+
 #[test]
 fn outside_the_window_every_dither_gives_the_same_byte_with_and_without_fma() {
     // A check of the argument above: every numerator, for every 997th f32 in [0, 1] and for
