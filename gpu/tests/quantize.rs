@@ -174,6 +174,11 @@ fn outside_the_window_every_dither_gives_the_same_byte_with_and_without_fma() {
 /// Runs `entry` of `KERNEL` + the test entry points over `input` (two words per item for
 /// `pairs`, one for `mul255`), returns one word per item.
 fn run(gpu: &mlab_gpu::Gpu, entry: &str, input: &[u32], items: u32) -> Vec<u32> {
+    run_with(gpu, entry, input, items, 0, 1)
+}
+
+/// [`run`] with `base` in the uniform's third word and `words` output words per item.
+fn run_with(gpu: &mlab_gpu::Gpu, entry: &str, input: &[u32], items: u32, base: u32, words: u32) -> Vec<u32> {
     const ENTRIES: &str = r"
 @group(0) @binding(0) var<storage, read> test_in: array<u32>;
 @group(0) @binding(1) var<storage, read_write> test_out: array<u32>;
@@ -186,6 +191,16 @@ fn test_index(gid: vec3<u32>) -> u32 { return gid.y * test_n.y + gid.x; }
 @compute @workgroup_size(64) fn mul255(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = test_index(gid);
     if (i < test_n.x) { test_out[i] = mlab_f32_mul255(test_in[i]); }
+}
+@compute @workgroup_size(64) fn every(@builtin(global_invocation_id) gid: vec3<u32>) {
+    // v = test_n.z + i: its product by 255 and its byte with u = 0.5 (the paper's rounding).
+    _ = &test_in; // the layout of every entry point has the input binding
+    let i = test_index(gid);
+    if (i < test_n.x) {
+        let v = test_n.z + i;
+        test_out[2u * i] = mlab_f32_mul255(v);
+        test_out[2u * i + 1u] = mlab_quantize_byte(v, 0x3f000000u);
+    }
 }
 @compute @workgroup_size(64) fn add(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = test_index(gid);
@@ -217,10 +232,10 @@ fn test_index(gid: vec3<u32>) -> u32 { return gid.y * test_n.y + gid.x; }
     };
     let input = buf(bytemuck::cast_slice(input), wgpu::BufferUsages::STORAGE);
     let n = buf(
-        bytemuck::cast_slice(&[items, gx * 64, 0, 0]),
+        bytemuck::cast_slice(&[items, gx * 64, base, 0]),
         wgpu::BufferUsages::UNIFORM,
     );
-    let size = u64::from(items) * 4;
+    let size = u64::from(items) * u64::from(words) * 4;
     let out = device.create_buffer(&wgpu::BufferDescriptor {
         label: None,
         size,
@@ -334,4 +349,29 @@ fn the_shader_multiplies_by_255_and_adds_as_the_cpu_rounds() {
     compare("add", &got, &want, |i| {
         format!("{:#x} + {:#x}", pairs[i][0], pairs[i][1])
     });
+}
+
+/// Every f32 in `[0, 1]` through the shader's `v * 255` and `floor(v * 255 + 0.5)`, in chunks
+/// of 2^23 (about a minute on lavapipe with 2 cores; not in CI):
+/// `cargo test -p mlab-gpu --test quantize -- --ignored`.
+#[test]
+#[ignore = "1.07e9 invocations: run on demand"]
+fn every_f32_in_0_1_multiplies_and_rounds_as_the_cpu() {
+    let Some(gpu) = common::gpu("every f32") else { return };
+    let end = 1.0f32.to_bits() + 1;
+    let chunk = 1u32 << 23;
+    let placeholder = [0u32; 1];
+    let mut base = 0;
+    while base < end {
+        let items = chunk.min(end - base);
+        let got = run_with(&gpu, "every", &placeholder, items, base, 2);
+        for i in 0..items {
+            let v = f32::from_bits(base + i);
+            let (m, q) = (got[2 * i as usize], got[2 * i as usize + 1]);
+            assert_eq!(m, (v * 255.0).to_bits(), "v * 255, v = {v:e}");
+            assert_eq!(q, u32::from(separate(v, 0.5)), "byte, v = {v:e}");
+        }
+        base += items;
+    }
+    println!("every f32 in [0, 1]: {end} products and bytes identical");
 }
