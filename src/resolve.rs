@@ -375,6 +375,10 @@ mod tests {
 }
 
 #[cfg(test)]
+#[expect(
+    clippy::cast_possible_truncation,
+    reason = "test bytes cut from wider integers on purpose"
+)]
 mod int_tests {
     //! The integer resolve: lanes (both arrangements) against the scalar definition, byte for
     //! byte, on every backend the unit tests run on; the exact cases of `docs/layout.md`.

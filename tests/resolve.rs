@@ -7,7 +7,7 @@
 //! Sizes (debug builds, CI): every single row (each channel sees every `(color, T)` pair:
 //! 65,536 rows) over five backgrounds; at M = 2 every `(T_front, C_back)` pair of each channel
 //! with the front color and back transmittance drawn from a fixed hash (65,536 pixels per
-//! seed, 4 seeds: the full 2^32 pairs of rows, or 2^24 per channel, would take minutes);
+//! seed, 2 seeds: the full 2^32 pairs of rows, or 2^24 per channel, would take minutes);
 //! arbitrary rows at M = 1, 2, 3, 4, 8 for the bound. About 2 s in a debug build.
 
 use mlab::glam::Vec3;
@@ -110,10 +110,10 @@ fn every_single_row() {
 }
 
 /// M = 2: every (T_front, C_back) pair of each channel, the front color and the back
-/// transmittance from a fixed hash, four seeds; and every row behind an empty one.
+/// transmittance from a fixed hash, two seeds; and every row behind an empty one.
 #[test]
 fn pairs_of_rows() {
-    for seed in 0..4u64 {
+    for seed in 0..2u64 {
         let mut rng = Rng(0x22 + seed);
         let pixels: Vec<[Row; 2]> = (0..65536u32)
             .map(|i| {

@@ -117,15 +117,15 @@ pub fn bound(rows: &[Row], bg: Background) -> [f64; 4] {
     let mut out = [0.0f64; 4];
     for ch in 0..3 {
         let mut steps = 0.0;
-        for j in 0..m {
-            steps += 0.5 + bytes[j][ch] / 256.0 * vis[j];
+        for (b, v) in bytes.iter().zip(&vis) {
+            steps += 0.5 + b[ch] / 256.0 * v;
         }
-        for i in 0..m {
+        for (i, fi) in f.iter().enumerate() {
             let mut r: f64 = ((i + 1)..m).map(|j| bytes[j][ch] / 256.0 * p(i, j)).sum();
             if let Some(k) = k {
                 r += k[ch] * p(i, m);
             }
-            steps += f[i] * r;
+            steps += fi * r;
         }
         if let Some(k) = k {
             steps += k[ch] * vis[m] + 0.5 + 0.504;

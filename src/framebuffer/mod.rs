@@ -252,9 +252,9 @@ pub(crate) fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
 ///
 /// Which resolve: for MLAB, [`resolve_rgba8`](Self::resolve_rgba8) and
 /// [`resolve_span_rgba8`](Self::resolve_span_rgba8) are the integer resolve (`docs/layout.md`,
-/// "Integer resolve": the same bytes in scalar code, every SIMD backend and a shader; within
-/// one step of [`to_rgba8`](crate::to_rgba8) of the f32 resolve on valid fragments, which it
-/// replaces there by measurement, `docs/performance.md`); for HT they are `to_rgba8` of the
+/// "Integer resolve": the same bytes in scalar code, every SIMD backend and a shader; for
+/// valid fragments and `M <= 30` within one step of [`to_rgba8`](crate::to_rgba8) of the f32
+/// resolve, which it replaces there by measurement, `docs/performance.md`); for HT they are `to_rgba8` of the
 /// f32 resolve. Every other resolve is the f32 one ([`Resolved`]; exact f32 programs in
 /// `docs/layout.md`).
 pub trait Framebuffer {

@@ -923,19 +923,20 @@ mod int8 {
 
 sse2_only! {
 /// The integer resolve (`crate::resolve::int`) on SSE2: two pixels per 128-bit register, each
-/// pixel's four 16-bit slots. The products are `q15(f, v) = mulhi(2 f, v) + (mullo(2 f, v) >> 15)`
-/// (`pmulhuw`, `pmullw`: `2 f v = 2 p`, whose high half is `p >> 15` and whose bit 15 is bit 14
-/// of `p`), from the doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]`, which one
-/// `punpcklbw` of the rows with their T bytes `& 0xfe` gives (`257 T & !1 = 2 floor(257 T / 2)`).
+/// pixel's four 16-bit slots, with the factors and the visibility both doubled:
+/// `q15(f, v) = (pmulhuw(2 f, 2 v) + 1) >> 1` (`pmulhuw` gives `floor(4 f v / 65536) =
+/// floor(p / 16384) = 2 (p >> 15) + bit 14 of p`, and `(x + 1) >> 1` of that is
+/// `(p + 16384) >> 15`). The doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]` are one
+/// `punpcklbw` of the rows with their T bytes `& 0xfe` (`257 T & !1 = 2 floor(257 T / 2)`).
 mod int8 {
     use super::*;
     use crate::resolve::int;
     use wide::{i16x8, u8x16, u16x8, u32x4};
 
-    /// `q15(f, v)` of the doubled factor `f2 = 2 f` and `v`, both in `0..=65535` and `0..=32767`.
+    /// `q15(f, v)` from `f2 = 2 f` (at most 65534) and `v2 = 2 v` (at most 65534).
     #[inline(always)]
-    fn q15(f2: u16x8, v: u16x8) -> u16x8 {
-        f2.mul_keep_high(v) + ((f2 * v) >> 15)
+    fn q15(f2: u16x8, v2: u16x8) -> u16x8 {
+        (f2.mul_keep_high(v2) + u16x8::splat(1)) >> 1
     }
 
     /// Two rows (pixels) as the doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]`.
@@ -948,14 +949,15 @@ mod int8 {
         cast(u8x16::unpack_low(t, x))
     }
 
-    /// One layer of two pixels: `acc += q15(f, v)` (saturating at 32767), then the new `v` in
-    /// every slot of the pixel (`pshuflw`, `pshufhw`).
+    /// One layer of two pixels: `acc += q15(f, v)` (saturating at 32767), then the new `2 v`
+    /// in every slot of the pixel (`pshuflw`, `pshufhw`, `paddw`).
     #[inline(always)]
-    fn layer(acc: &mut i16x8, v: &mut u16x8, f2: u16x8) {
-        let p = q15(f2, *v);
+    fn layer(acc: &mut i16x8, v2: &mut u16x8, f2: u16x8) {
+        let p = q15(f2, *v2);
         *acc = acc.saturating_add(cast(p));
         let a = p.to_array();
-        *v = u16x8::new([a[3], a[3], a[3], a[3], a[7], a[7], a[7], a[7]]);
+        let v = u16x8::new([a[3], a[3], a[3], a[3], a[7], a[7], a[7], a[7]]);
+        *v2 = v + v;
     }
 
     /// The integer resolve of `m` layers of 8 pixels, as the SSSE3/AVX2 form computes it.
@@ -968,21 +970,21 @@ mod int8 {
         let start = int::ACC_START as i16;
         let alpha = if OPAQUE { int::ACC_MAX as i16 } else { start };
         let mut acc = [i16x8::new(core::array::from_fn(|i| if i % 4 == 3 { alpha } else { start })); 4];
-        let mut v = [u16x8::splat(int::VIS_ONE as u16); 4];
+        let mut v2 = [u16x8::splat(2 * int::VIS_ONE as u16); 4];
         for j in 0..m {
             let l = layer_rows(j);
             for k in 0..4 {
-                layer(&mut acc[k], &mut v[k], factors([l[2 * k], l[2 * k + 1]]));
+                layer(&mut acc[k], &mut v2[k], factors([l[2 * k], l[2 * k + 1]]));
             }
         }
         let q: [i16x8; 4] = core::array::from_fn(|k| {
             if OPAQUE {
                 let [r, g, b] = bg;
                 let bg2 = u16x8::new(core::array::from_fn(|i| (2 * [r, g, b, 0][i % 4]) as u16));
-                cast::<u16x8, i16x8>(cast::<i16x8, u16x8>(acc[k].saturating_add(cast(q15(bg2, v[k])))) >> 7)
+                cast::<u16x8, i16x8>(cast::<i16x8, u16x8>(acc[k].saturating_add(cast(q15(bg2, v2[k])))) >> 7)
             } else {
                 let color = u16x8::new(core::array::from_fn(|i| if i % 4 == 3 { 0 } else { 0xffff }));
-                let a = q15(u16x8::splat(2 * 32640), u16x8::splat(int::VIS_ONE as u16) - v[k]);
+                let a = q15(u16x8::splat(2 * 32640), u16x8::splat(2 * int::VIS_ONE as u16) - v2[k]);
                 let a = (a + u16x8::splat(64)) >> 7;
                 let c = cast::<i16x8, u16x8>(acc[k]) >> 7;
                 cast((c & color) | (a & !color))
