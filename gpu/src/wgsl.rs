@@ -1,0 +1,104 @@
+//! The WGSL twin of the kernel, as source text for a renderer's own shaders.
+//!
+//! Every function works on the kernel's bytes: a row is a `vec2<u32>` holding
+//! [`Row::words`](mlab::Row::words) (`x = R | G << 8 | B << 16 | T << 24`, `y` = the bits of the
+//! f32 depth), a tail is a `vec2<u32>` holding the tail's two little-endian words. Fragments are
+//! passed as the bit patterns of their f32 fields (`bitcast<u32>(v)`), premultiplied color,
+//! alpha and depth, already validated as [`mlab::Fragment`] validates them (finite, color and
+//! alpha in `[0, 1]`): the shader does not re-check.
+//!
+//! No f32 arithmetic is used: the kernel's two f32 steps (the quantization `floor(v * 255 + u)`
+//! and the faint test `alpha * 255 < 16`) are exact integer emulations of the correctly rounded
+//! f32 multiply and add, and depths are compared by their bits, so FMA contraction and flushed
+//! subnormals cannot change a byte (`docs/gpu.md` says why this is needed).
+//!
+//! | text | what | uses |
+//! |---|---|---|
+//! | [`KERNEL`] | quantization (both arithmetics), both merges, both tail adds, the depth test | nothing |
+//! | [`mlab()`] | [`KERNEL`], a header for `M` and the arithmetic, `mlab_insert` (Listing 1) | |
+//! | [`hybrid()`] | [`KERNEL`], a header for `K` and the arithmetic, `ht_insert` (Listing 2) | |
+//! | [`compositor()`] | [`mlab()`] or [`hybrid()`] followed by the compositor's entry point and bindings | [`crate::Compositor`] |
+//!
+//! A shader includes [`mlab()`] (or [`hybrid()`]) and calls, per fragment:
+//!
+//! ```wgsl
+//! var rows: array<vec2<u32>, MLAB_M>;           // the pixel's rows, loaded from storage
+//! let row = mlab_quantize(vec3<u32>(bitcast<u32>(c.r), bitcast<u32>(c.g), bitcast<u32>(c.b)),
+//!                         bitcast<u32>(alpha), bitcast<u32>(depth));
+//! mlab_insert(&rows, row);                      // Listing 1, then store the rows back
+//! ```
+//!
+//! Every name the text defines starts with `mlab_`, `ht_` or `composite_` (and the constants
+//! `MLAB_M`, `HT_K`, `MLAB_EMPTY_ROW`, `MLAB_EMPTY_TAIL`). One method and size per shader module.
+
+use crate::{Arith, GpuError};
+use mlab::Layers;
+
+/// The functions shared by every method: depth test, dithers, the exact f32 emulation,
+/// quantization (`mlab_quantize_paper`, `mlab_quantize_unbiased`), merges (`mlab_merge_paper`,
+/// `mlab_merge_unbiased`), tail adds (`mlab_tail_add_paper`, `mlab_tail_add_wide`) and the
+/// integer resolve's `mlab_q15` and `mlab_resolve_pixel`.
+pub const KERNEL: &str = include_str!("wgsl/kernel.wgsl");
+
+/// Listing 1 (`mlab_insert`) and the integer RGBA8 resolve (`mlab_resolve_rgba8`); needs `MLAB_M`, `mlab_merge` and [`KERNEL`] ([`mlab()`] has them all).
+pub const MLAB_INSERT: &str = include_str!("wgsl/mlab.wgsl");
+
+/// Listing 2 (`ht_insert`); needs `HT_K`, `ht_tail_add` and [`KERNEL`] ([`hybrid()`] has them all).
+pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
+
+/// The compositor's bindings and helpers (see [`compositor()`]).
+const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");
+const COMPOSITE_MLAB: &str = include_str!("wgsl/composite_mlab.wgsl");
+const COMPOSITE_HT: &str = include_str!("wgsl/composite_ht.wgsl");
+const COMPOSITE_RESOLVE: &str = include_str!("wgsl/composite_resolve.wgsl");
+
+fn check_size(layers: Layers) -> Result<(), GpuError> {
+    let (Layers::Mlab(n) | Layers::Hybrid(n)) = layers;
+    if Layers::SIZES.contains(&n) {
+        Ok(())
+    } else {
+        Err(GpuError::UnsupportedLayers(layers))
+    }
+}
+
+/// MLAB with `m` rows in the arithmetic `arith`: [`KERNEL`], then `const MLAB_M`,
+/// `mlab_merge` and `mlab_quantize` (the arithmetic's), then [`MLAB_INSERT`] (`mlab_insert`,
+/// and `mlab_resolve_rgba8`, the kernel's integer RGBA8 resolve). `m` is one of
+/// [`Layers::SIZES`] (the kernel's run-time sizes, 1..=8).
+pub fn mlab(m: usize, arith: Arith) -> Result<String, GpuError> {
+    check_size(Layers::Mlab(m))?;
+    let a = arith.name();
+    Ok(format!(
+        "{KERNEL}\n// mlab_gpu::wgsl::mlab({m}, {a})\nconst MLAB_M: u32 = {m}u;\n\
+         fn mlab_merge(front: vec2<u32>, back: vec2<u32>) -> vec2<u32> {{\n    return mlab_merge_{a}(front, back);\n}}\n\
+         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z);\n}}\n\n{MLAB_INSERT}"
+    ))
+}
+
+/// Hybrid Transparency with `k` head rows in the arithmetic `arith` ([`Arith::Paper`]: the
+/// paper's tail, [`Arith::Unbiased`]: the 64-bit [`mlab::Tail`] as two words): [`KERNEL`],
+/// then `const HT_K`, `ht_tail_add` and `mlab_quantize`, then [`HT_INSERT`]. `k` is one of
+/// [`Layers::SIZES`].
+pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
+    check_size(Layers::Hybrid(k))?;
+    let a = arith.name();
+    let tail = match arith {
+        Arith::Paper => "paper",
+        Arith::Unbiased => "wide",
+    };
+    Ok(format!(
+        "{KERNEL}\n// mlab_gpu::wgsl::hybrid({k}, {a})\nconst HT_K: u32 = {k}u;\n\
+         fn ht_tail_add(tail: vec2<u32>, row: vec2<u32>) -> vec2<u32> {{\n    return mlab_tail_add_{tail}(tail, row);\n}}\n\
+         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z);\n}}\n\n{HT_INSERT}"
+    ))
+}
+
+/// [`mlab()`] or [`hybrid()`] for `layers`, then the compositor's bindings and its entry point
+/// `composite` (binding layout in `docs/gpu.md` and at the top of that text): the exact source
+/// that [`crate::Compositor`] compiles ([`crate::Compositor::source`]).
+pub fn compositor(layers: Layers, arith: Arith) -> Result<String, GpuError> {
+    Ok(match layers {
+        Layers::Mlab(m) => format!("{}\n{COMPOSITE}{COMPOSITE_MLAB}{COMPOSITE_RESOLVE}", mlab(m, arith)?),
+        Layers::Hybrid(k) => format!("{}\n{COMPOSITE}{COMPOSITE_HT}", hybrid(k, arith)?),
+    })
+}

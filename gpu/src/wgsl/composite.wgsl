@@ -1,0 +1,55 @@
+// The compositor's entry point (mlab_gpu::Compositor): one invocation per stored pixel, which
+// inserts its fragments in submission order (the CPU sorted them by pixel, stably) and writes its
+// slots. Bindings (group 0):
+//   0 uniform          CompositeParams
+//   1 storage, read    offsets: array<u32>, pixels + 1 entries; pixel p's fragments are
+//                      offsets[p] .. offsets[p + 1]
+//   2 storage, read    fragments: array<u32>, 5 words per fragment: bits of premultiplied
+//                      R, G, B, alpha, depth (f32)
+//   3 storage, rw      rows: array<vec2<u32>>, the framebuffer's storage (Row::words)
+//   4 storage, rw      image: array<u32>, RGBA8 pixels (entry point `resolve`, MLAB only)
+struct CompositeParams {
+    // Stored pixels in this dispatch (padding lanes of spans included).
+    pixels: u32,
+    // Invocations per row of the 2-D dispatch (workgroups in x times 64).
+    pitch: u32,
+    // 1: 8-pixel layer-major spans (mlab::Spans); 0: pixel-major (mlab::PixelMajor).
+    spans: u32,
+    // This dispatch inserts fragments first .. first + COMPOSITE_CHUNK of each pixel; 0 starts
+    // from empty rows, later dispatches load the rows the previous one stored.
+    first: u32,
+    // Image width, and stored pixels per line (the width, or 8 * ceil(width / 8) for spans).
+    width: u32,
+    line: u32,
+    pad0: u32,
+    pad1: u32,
+    // The background for `resolve`: three channels as mlab_gpu::background_q15 gives them, and
+    // w = 1 (opaque) or 0 (Background::Transparent).
+    background: vec4<u32>,
+}
+
+// Fragments per pixel per dispatch. Mesa's llvmpipe (lavapipe) ends an invocation's loops after
+// 65,535 iterations in all (gallivm's loop limiter, one counter per shader function, a guard
+// against endless shaders): a pixel with more fragments would silently lose the rest. A pixel
+// with more than COMPOSITE_CHUNK fragments is continued by further dispatches (`first`), which
+// load its rows back; this also bounds the run time of one invocation (GPU watchdogs).
+const COMPOSITE_CHUNK: u32 = 32768u;
+
+@group(0) @binding(0) var<uniform> composite_params: CompositeParams;
+@group(0) @binding(1) var<storage, read> composite_offsets: array<u32>;
+@group(0) @binding(2) var<storage, read> composite_fragments: array<u32>;
+@group(0) @binding(3) var<storage, read_write> composite_rows: array<vec2<u32>>;
+
+// Index of slot j (of `slots` per pixel) of stored pixel p.
+fn composite_slot(p: u32, j: u32, slots: u32) -> u32 {
+    if (composite_params.spans != 0u) {
+        return ((p >> 3u) * slots + j) * 8u + (p & 7u);
+    }
+    return p * slots + j;
+}
+
+fn composite_row(i: u32) -> vec2<u32> {
+    let k = 5u * i;
+    let c = vec3<u32>(composite_fragments[k], composite_fragments[k + 1u], composite_fragments[k + 2u]);
+    return mlab_quantize(c, composite_fragments[k + 3u], composite_fragments[k + 4u]);
+}

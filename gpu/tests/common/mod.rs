@@ -1,0 +1,100 @@
+//! Shared by the GPU tests: the adapter (a failure under `CI=true`, a skip elsewhere), a
+//! deterministic generator and fragment streams.
+#![allow(dead_code)]
+
+use mlab_gpu::{Gpu, GpuFragment};
+
+/// The GPU, or `None` with a skip line when there is no Vulkan adapter and `CI` is not `true`.
+/// Under `CI=true` a missing adapter fails the test.
+pub fn gpu(test: &str) -> Option<Gpu> {
+    match Gpu::new() {
+        Ok(gpu) => Some(gpu),
+        Err(e) if std::env::var("CI").is_ok_and(|v| v == "true") => {
+            panic!("{test}: CI=true and no GPU adapter: {e} (install mesa-vulkan-drivers libvulkan1)")
+        }
+        Err(e) => {
+            println!("SKIP {test}: no GPU adapter ({e}); with CI=true this is a failure");
+            None
+        }
+    }
+}
+
+/// SplitMix64: deterministic, seedable, no dependency.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    pub fn below(&mut self, n: u32) -> u32 {
+        (((self.next() >> 32) * u64::from(n)) >> 32) as u32
+    }
+
+    /// Uniform in [0, 1) with 24 bits.
+    pub fn unit(&mut self) -> f32 {
+        (self.next() >> 40) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    /// A value in [0, 1] from a mix of regimes: uniform, exact bytes k / 255, tiny and
+    /// subnormal values, 0, -0 and 1, and any f32 bit pattern in [0, 1].
+    pub fn value(&mut self) -> f32 {
+        match self.below(8) {
+            0..=2 => self.unit(),
+            3 => self.below(256) as f32 / 255.0,
+            4 => self.unit() * 1e-3,
+            5 => f32::from_bits(self.below(0x0080_0000)), // subnormal
+            6 => [0.0, -0.0, 1.0, 0.5 / 255.0, 16.0 / 255.0][self.below(5) as usize],
+            _ => f32::from_bits(self.below(1.0f32.to_bits() + 1)),
+        }
+    }
+
+    /// Alpha in [0, 1]: faint (below 16 / 255, dithered by Unbiased), mid, opaque, zero.
+    pub fn alpha(&mut self) -> f32 {
+        match self.below(6) {
+            0 | 1 => self.unit() * (17.0 / 255.0), // faint and the threshold around 16 / 255
+            2 => 1.0,
+            3 => 0.0,
+            _ => self.value(),
+        }
+    }
+
+    /// A finite depth: few distinct values (coplanar fragments), random, extremes.
+    pub fn depth(&mut self) -> f32 {
+        match self.below(6) {
+            0 | 1 => self.below(4) as f32,
+            2 => self.unit() * 100.0 - 10.0,
+            3 => [0.0, -0.0, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 1e-45, -1e-45][self.below(7) as usize],
+            _ => {
+                // any finite bit pattern
+                let b = self.next() as u32;
+                let f = f32::from_bits(b);
+                if f.is_finite() { f } else { 1.0 }
+            }
+        }
+    }
+
+    /// A valid premultiplied fragment for `pixel`: color usually at most alpha, sometimes
+    /// additive (color above alpha, up to 1).
+    pub fn fragment(&mut self, pixel: u32) -> GpuFragment {
+        let a = self.alpha();
+        let additive = self.below(8) == 0;
+        let c = |r: &mut Rng| if additive { r.value() } else { r.value() * a };
+        let rgba = [c(self), c(self), c(self), a];
+        GpuFragment {
+            pixel,
+            rgba,
+            depth: self.depth(),
+        }
+    }
+
+    /// A fragment for a random pixel of `pixels`.
+    pub fn fragment_in(&mut self, pixels: u32) -> GpuFragment {
+        let p = self.below(pixels);
+        self.fragment(p)
+    }
+}

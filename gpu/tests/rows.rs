@@ -1,0 +1,434 @@
+//! The compositor's rows against the CPU kernel (`DynFramebuffer`), byte for byte: random and
+//! adversarial streams, every method and size the kernel offers at run time, both arithmetics,
+//! both layouts; band splits; typed errors.
+
+mod common;
+
+use common::{Rng, gpu};
+use mlab::glam::Vec3;
+use mlab::{Background, FragmentError, Layers};
+use mlab_gpu::{Arith, Compositor, GpuError, GpuFragment, Layout, cpu, wgsl};
+
+fn all_layers() -> impl Iterator<Item = Layers> {
+    Layers::SIZES
+        .into_iter()
+        .map(Layers::Mlab)
+        .chain(Layers::SIZES.into_iter().map(Layers::Hybrid))
+}
+
+/// GPU and CPU words for one stream; panics with the first differing slot.
+fn check(c: &Compositor, layers: Layers, arith: Arith, layout: Layout, w: u32, h: u32, frags: &[GpuFragment]) {
+    let gpu = c.composite(w, h, frags).expect("gpu composite");
+    let cpu = cpu::composite(layers, arith, layout, w, h, frags).expect("cpu composite");
+    assert_eq!(gpu.len(), cpu.len(), "{layers:?} {arith:?} {layout:?} {w}x{h}");
+    if let Some(i) = (0..gpu.len()).find(|&i| gpu[i] != cpu[i]) {
+        let s = i / 2;
+        panic!(
+            "{layers:?} {arith:?} {layout:?} {w}x{h}, {} fragments: slot {s} differs: gpu {:08x} {:08x}, cpu {:08x} {:08x}",
+            frags.len(),
+            gpu[2 * s],
+            gpu[2 * s + 1],
+            cpu[2 * s],
+            cpu[2 * s + 1]
+        );
+    }
+}
+
+fn random_stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<GpuFragment> {
+    (0..n)
+        .map(|_| {
+            let p = rng.below(w * h);
+            rng.fragment(p)
+        })
+        .collect()
+}
+
+#[test]
+fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
+    let Some(gpu) = gpu("random_streams") else { return };
+    let mut rng = Rng(0x6d6c_6162_6770_7531);
+    let mut total = 0usize;
+    for layers in all_layers() {
+        for arith in Arith::ALL {
+            // Spans (the DynFramebuffer's storage) for every size, pixel-major for every other.
+            let layout = if total.is_multiple_of(3) {
+                Layout::PixelMajor
+            } else {
+                Layout::Spans
+            };
+            let c = Compositor::new(&gpu, layers, arith, layout).expect("compositor");
+            for (w, h, n) in [(37, 23, 24_000), (8, 1, 3_000), (1, 1, 600), (64, 20, 9_000)] {
+                let frags = random_stream(&mut rng, w, h, n);
+                check(&c, layers, arith, layout, w, h, &frags);
+                total += n;
+            }
+        }
+    }
+    println!("random: {total} fragments through the GPU and the CPU, identical rows");
+    assert!(total >= 1_000_000);
+}
+
+#[test]
+fn every_layout_and_arithmetic_on_the_same_stream() {
+    let Some(gpu) = gpu("layouts") else { return };
+    let mut rng = Rng(7);
+    let frags = random_stream(&mut rng, 19, 5, 4_000);
+    for layers in [Layers::Mlab(3), Layers::Hybrid(7)] {
+        for arith in Arith::ALL {
+            for layout in [Layout::PixelMajor, Layout::Spans] {
+                let c = Compositor::new(&gpu, layers, arith, layout).expect("compositor");
+                check(&c, layers, arith, layout, 19, 5, &frags);
+            }
+        }
+    }
+}
+
+/// Faint, opaque, coplanar, extreme and saturating streams.
+fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
+    let n = w * h;
+    let mut streams = Vec::new();
+    // Many faint fragments per pixel (the dithers), distinct depths.
+    streams.push(
+        (0..20_000)
+            .map(|i| GpuFragment {
+                pixel: i % n,
+                rgba: [0.5 / 255.0, 1.0 / 255.0, 0.0, 1.0 / 255.0],
+                depth: (i / n) as f32 * 0.25,
+            })
+            .collect(),
+    );
+    // Faint fragments at the quantization's critical values (where an FMA would change the
+    // byte): tiny colors with every dither.
+    streams.push(
+        (0..20_000u32)
+            .map(|i| {
+                let v = f32::from_bits(0x37c0_c080 + (i % 64) * 0x0010_0000);
+                GpuFragment {
+                    pixel: i % n,
+                    rgba: [v, v * 0.5, v * 2.0, 15.9 / 255.0],
+                    depth: f32::from_bits(0x3f80_0000 + i),
+                }
+            })
+            .collect(),
+    );
+    // Opaque fragments in random order (a z-buffer), and coplanar opaque ones.
+    streams.push(
+        (0..10_000)
+            .map(|_| {
+                let mut f = rng.fragment_in(n);
+                f.rgba[3] = 1.0;
+                f
+            })
+            .collect(),
+    );
+    streams.push(
+        (0..10_000)
+            .map(|_| {
+                let mut f = rng.fragment_in(n);
+                f.depth = 1.0;
+                f
+            })
+            .collect(),
+    );
+    // Equal depths, -0 against +0, extremes of f32, subnormal depths.
+    streams.push(
+        (0..10_000)
+            .map(|i| {
+                let mut f = rng.fragment_in(n);
+                f.depth = [0.0, -0.0, 1e-45, -1e-45, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 3.0][i % 8];
+                f
+            })
+            .collect(),
+    );
+    // Saturating tails: thousands of bright fragments into a few pixels.
+    streams.push(
+        (0..30_000u32)
+            .map(|i| GpuFragment {
+                pixel: i % 3,
+                rgba: [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
+                depth: (i % 1000) as f32,
+            })
+            .collect(),
+    );
+    // Additive light only (alpha 0) and invisible fragments (nothing at all).
+    streams.push(
+        (0..10_000)
+            .map(|i| {
+                let mut f = rng.fragment_in(n);
+                f.rgba[3] = 0.0;
+                if i % 2 == 0 {
+                    f.rgba = [0.0, 0.0, 0.0, 0.0];
+                }
+                f
+            })
+            .collect(),
+    );
+    streams
+}
+
+#[test]
+fn adversarial_streams_match_the_cpu() {
+    let Some(gpu) = gpu("adversarial") else { return };
+    let mut rng = Rng(23);
+    let (w, h) = (13, 3);
+    let streams = adversarial(&mut rng, w, h);
+    let mut total = 0;
+    for layers in [1, 2, 3, 4, 6, 8]
+        .map(Layers::Mlab)
+        .into_iter()
+        .chain([1, 3, 7].map(Layers::Hybrid))
+    {
+        for arith in Arith::ALL {
+            let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
+            for s in &streams {
+                check(&c, layers, arith, Layout::Spans, w, h, s);
+                total += s.len();
+            }
+        }
+    }
+    println!("adversarial: {total} fragments, identical rows");
+}
+
+#[test]
+fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
+    let Some(gpu) = gpu("paper_tail_saturation") else {
+        return;
+    };
+    // 70 000 opaque fragments into one pixel: PaperTail's 16-bit count and alpha saturate.
+    let frags: Vec<GpuFragment> = (0..70_000u32)
+        .map(|i| GpuFragment {
+            pixel: 0,
+            rgba: [0.2, 0.1, 1.0, 1.0],
+            depth: (i % 5000) as f32 + 1.0,
+        })
+        .collect();
+    for arith in Arith::ALL {
+        let c = Compositor::new(&gpu, Layers::Hybrid(1), arith, Layout::PixelMajor).expect("compositor");
+        check(&c, Layers::Hybrid(1), arith, Layout::PixelMajor, 1, 1, &frags);
+        let words = c.composite(1, 1, &frags).expect("gpu");
+        if arith == Arith::Paper {
+            assert_eq!(words[3], u32::MAX, "alpha and count saturated at 65535");
+        }
+    }
+}
+
+#[test]
+fn bands_split_by_the_binding_limit_give_the_same_words() {
+    let Some(gpu) = gpu("bands") else { return };
+    let mut rng = Rng(99);
+    let (w, h) = (30, 40);
+    let frags = random_stream(&mut rng, w, h, 20_000);
+    for layout in [Layout::PixelMajor, Layout::Spans] {
+        let mut c = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, layout).expect("compositor");
+        let whole = c.composite(w, h, &frags).expect("one band");
+        // About 10 KB of fragments per line (17 per pixel, 20 bytes each) and 1 KB of rows:
+        // 16 KiB bindings split the frame into bands of one line.
+        c.set_max_binding_bytes(16384);
+        assert_eq!(c.max_binding_bytes(), 16384);
+        assert_eq!(c.composite(w, h, &frags).expect("bands"), whole);
+        check(&c, Layers::Hybrid(3), Arith::Unbiased, layout, w, h, &frags);
+        // One line with more fragments than a binding holds is a typed error.
+        let crowded: Vec<GpuFragment> = (0..1000).map(|_| rng.fragment(0)).collect();
+        assert!(matches!(
+            c.composite(w, h, &crowded),
+            Err(GpuError::LineTooLarge { y: 0, .. })
+        ));
+    }
+}
+
+#[test]
+fn bad_input_is_a_typed_error_not_a_panic() {
+    let Some(gpu) = gpu("errors") else { return };
+    let c = Compositor::new(&gpu, Layers::Mlab(2), Arith::Paper, Layout::Spans).expect("compositor");
+    let ok = GpuFragment {
+        pixel: 0,
+        rgba: [0.1, 0.1, 0.1, 0.5],
+        depth: 1.0,
+    };
+    let bad = |f: GpuFragment| c.composite(4, 4, &[ok, f]);
+    assert_eq!(
+        bad(GpuFragment { pixel: 16, ..ok }),
+        Err(GpuError::PixelOutOfRange {
+            index: 1,
+            pixel: 16,
+            pixels: 16
+        })
+    );
+    for (f, e) in [
+        (GpuFragment { depth: f32::NAN, ..ok }, FragmentError::NanDepth),
+        (
+            GpuFragment {
+                depth: f32::INFINITY,
+                ..ok
+            },
+            FragmentError::InfiniteDepth,
+        ),
+        (
+            GpuFragment {
+                rgba: [0.1, 0.1, 0.1, 1.5],
+                ..ok
+            },
+            FragmentError::AlphaOutOfRange,
+        ),
+        (
+            GpuFragment {
+                rgba: [-0.1, 0.1, 0.1, 0.5],
+                ..ok
+            },
+            FragmentError::NegativeColor,
+        ),
+        (
+            GpuFragment {
+                rgba: [1.1, 0.1, 0.1, 0.5],
+                ..ok
+            },
+            FragmentError::ColorAboveOne,
+        ),
+    ] {
+        assert_eq!(bad(f), Err(GpuError::Fragment { index: 1, error: e }));
+    }
+    assert!(matches!(
+        c.composite(u32::MAX, 2, &[]),
+        Err(GpuError::FrameTooLarge { .. })
+    ));
+    assert!(matches!(
+        Compositor::new(&gpu, Layers::Mlab(9), Arith::Paper, Layout::Spans),
+        Err(GpuError::UnsupportedLayers(Layers::Mlab(9)))
+    ));
+    assert!(matches!(
+        wgsl::hybrid(0, Arith::Paper),
+        Err(GpuError::UnsupportedLayers(_))
+    ));
+    // Empty frames and empty streams are fine: cleared storage.
+    assert_eq!(c.composite(0, 0, &[]), Ok(vec![]));
+    assert_eq!(c.composite(0, 5, &[]), Ok(vec![]));
+    assert!(matches!(
+        c.composite(0, 5, &[ok]),
+        Err(GpuError::PixelOutOfRange { index: 0, .. })
+    ));
+    assert_eq!(
+        c.composite(3, 1, &[]).expect("empty"),
+        cpu::composite(Layers::Mlab(2), Arith::Paper, Layout::Spans, 3, 1, &[]).expect("cpu")
+    );
+}
+
+#[test]
+fn the_exported_wgsl_is_what_the_compositor_runs() {
+    let Some(gpu) = gpu("exported_wgsl") else { return };
+    for layers in all_layers() {
+        for arith in Arith::ALL {
+            let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
+            let library = match layers {
+                Layers::Mlab(m) => wgsl::mlab(m, arith),
+                Layers::Hybrid(k) => wgsl::hybrid(k, arith),
+            }
+            .expect("library");
+            assert_eq!(c.source(), wgsl::compositor(layers, arith).expect("text"));
+            assert!(c.source().starts_with(&library), "{layers:?} {arith:?}");
+            assert!(library.starts_with(wgsl::KERNEL));
+        }
+    }
+    // The library alone (no entry point) is valid WGSL a renderer can include.
+    let device = gpu.device();
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    for src in [wgsl::mlab(8, Arith::Unbiased), wgsl::hybrid(1, Arith::Paper)] {
+        let _module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: None,
+            source: wgpu::ShaderSource::Wgsl(src.expect("text").into()),
+        });
+    }
+    assert!(pollster::block_on(scope.pop()).is_none());
+}
+
+#[test]
+fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
+    let Some(gpu) = gpu("long_pixels") else { return };
+    // Pixel 0: 100 000 fragments (lavapipe ends an invocation's loops after 65,535 iterations:
+    // three dispatches of 32 768); the others a few, so later dispatches leave them untouched.
+    let mut rng = Rng(5);
+    let mut frags: Vec<GpuFragment> = (0..100_000).map(|_| rng.fragment(0)).collect();
+    frags.extend((0..500).map(|_| rng.fragment_in(6)));
+    for layers in [Layers::Mlab(1), Layers::Mlab(5), Layers::Hybrid(2)] {
+        for arith in Arith::ALL {
+            let c = Compositor::new(&gpu, layers, arith, Layout::PixelMajor).expect("compositor");
+            check(&c, layers, arith, Layout::PixelMajor, 3, 2, &frags);
+        }
+    }
+}
+
+#[path = "../../examples/common/raster.rs"]
+mod raster;
+
+#[test]
+fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
+    let Some(gpu) = gpu("torus") else { return };
+    let (w, h) = (160, 120);
+    let mut frags = Vec::new();
+    for t in &raster::scene(w, h, 48, 24) {
+        raster::rasterize(t, w, h, |x, y, z| {
+            let f = mlab::Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z).expect("valid");
+            let c = f.color();
+            frags.push(GpuFragment {
+                pixel: y * w + x,
+                rgba: [c.x, c.y, c.z, f.alpha()],
+                depth: z,
+            });
+        });
+    }
+    assert!(frags.len() > 10_000);
+    for layers in [Layers::Mlab(2), Layers::Mlab(4), Layers::Hybrid(3)] {
+        for arith in Arith::ALL {
+            let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
+            check(&c, layers, arith, Layout::Spans, w, h, &frags);
+        }
+    }
+}
+
+#[test]
+fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
+    let Some(gpu) = gpu("rgba8") else { return };
+    let mut rng = Rng(0x5247_4241);
+    let backgrounds = [
+        Background::Transparent,
+        Background::Opaque(Vec3::new(0.9, 0.9, 0.85)),
+        Background::Opaque(Vec3::new(0.0, 1.0, 128.0 / 255.0)),
+        Background::Opaque(Vec3::new(f32::NAN, -1.0, 2.0)),
+        Background::Opaque(Vec3::new(1e-40, 0.5 / 255.0, f32::INFINITY)),
+    ];
+    let mut total = 0;
+    for m in Layers::SIZES {
+        for arith in Arith::ALL {
+            for layout in [Layout::Spans, Layout::PixelMajor] {
+                let c = Compositor::new(&gpu, Layers::Mlab(m), arith, layout).expect("compositor");
+                for (w, h, n) in [(37, 11, 6_000), (8, 2, 800), (1, 1, 50)] {
+                    let frags = random_stream(&mut rng, w, h, n);
+                    let bg = backgrounds[rng.below(backgrounds.len() as u32) as usize];
+                    let (words, image) = c.composite_rgba8(w, h, &frags, bg).expect("gpu");
+                    assert_eq!(words, c.composite(w, h, &frags).expect("gpu rows"));
+                    let want = cpu::resolve_rgba8(Layers::Mlab(m), arith, w, h, &frags, bg).expect("cpu");
+                    assert_eq!(image.len(), want.len());
+                    if let Some(i) = (0..image.len()).find(|&i| image[i] != want[i]) {
+                        panic!(
+                            "M = {m} {arith:?} {layout:?} {w}x{h} {bg:?}: pixel {i}: gpu {:?}, cpu {:?}",
+                            image[i], want[i]
+                        );
+                    }
+                    total += n;
+                }
+            }
+        }
+    }
+    println!("rgba8: {total} fragments, identical images");
+    // Bands give the same image; HT has no integer resolve.
+    let frags = random_stream(&mut rng, 30, 40, 20_000);
+    let bg = Background::Opaque(Vec3::new(0.2, 0.4, 0.6));
+    let mut c = Compositor::new(&gpu, Layers::Mlab(4), Arith::Unbiased, Layout::Spans).expect("compositor");
+    let whole = c.composite_rgba8(30, 40, &frags, bg).expect("one band");
+    c.set_max_binding_bytes(16384);
+    assert_eq!(c.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
+    let ht = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, Layout::Spans).expect("compositor");
+    assert_eq!(
+        ht.composite_rgba8(2, 2, &[], bg),
+        Err(GpuError::NoIntegerResolve(Layers::Hybrid(3)))
+    );
+}
