@@ -17,7 +17,7 @@
 //! T_tail = (1 - S_a / n)^n
 //! c_tail = S_c / S_a                                    (the tail's average color)
 //! C_tail = c_tail * (1 - T_tail)
-//! C      = C_head + T_head * C_tail,  T = T_head * T_tail   (hybrid::resolve)
+//! C      = C_head + T_head * C_tail,  T = T_head * T_tail   (Hybrid::resolve)
 //! pixel  = C + C_background * T                         (Resolved::over, Eq. 6)
 //! ```
 //!

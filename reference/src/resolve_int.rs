@@ -98,7 +98,13 @@ pub fn exact(rows: &[Row], bg: Background) -> [f64; 4] {
 /// ```
 pub fn bound(rows: &[Row], bg: Background) -> [f64; 4] {
     let m = rows.len();
-    let bytes: Vec<[f64; 4]> = rows.iter().map(|r| r.rgbt().map(f64::from)).collect();
+    let bytes: Vec<[f64; 4]> = rows
+        .iter()
+        .map(|r| {
+            let [c0, c1, c2, t, ..] = r.to_bytes();
+            [c0, c1, c2, t].map(f64::from)
+        })
+        .collect();
     let eps = |t: f64| 32768.0 * t / 255.0 - (257.0 * t / 2.0).floor();
     let f: Vec<f64> = bytes.iter().map(|b| eps(b[3]) + 0.5).collect();
     // Exact visibilities in front of each row, and the a-priori bound on the error of v.
