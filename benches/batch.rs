@@ -75,12 +75,7 @@ type RawEvent = (u32, u32, [f32; 4], f32);
 
 /// The scene of the rasterizer example with more triangles, unvalidated.
 fn mesh_raw(w: u32, h: u32) -> Vec<RawEvent> {
-    let mut out = Vec::new();
-    for t in raster::scene(w, h, 96, 48) {
-        let [r, g, b] = t.color;
-        raster::rasterize(&t, w, h, |x, y, z| out.push((x, y, [r, g, b, t.alpha], z)));
-    }
-    out
+    raster::events(w, h, 96, 48)
 }
 
 #[inline(always)]

@@ -21,12 +21,7 @@ mod raster;
 type RawEvent = (u32, u32, [f32; 4], f32);
 
 fn mesh_raw(w: u32, h: u32) -> Vec<RawEvent> {
-    let mut out = Vec::new();
-    for t in raster::scene(w, h, 96, 48) {
-        let [r, g, b] = t.color;
-        raster::rasterize(&t, w, h, |x, y, z| out.push((x, y, [r, g, b, t.alpha], z)));
-    }
-    out
+    raster::events(w, h, 96, 48) // the stream of `client_mesh` in benches/batch.rs
 }
 
 macro_rules! driver {

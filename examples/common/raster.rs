@@ -102,3 +102,15 @@ fn torus(out: &mut Vec<Triangle>, width: u32, height: u32, rings: u32, segments:
         }
     }
 }
+
+/// The pixel events of [`scene`] with `rings` x `segments` quads per torus, in submission
+/// order, as a renderer holds them before validation: `(x, y, straight [R, G, B, A], z)`.
+#[allow(dead_code)] // the benches' client streams; the examples draw triangles directly
+pub fn events(width: u32, height: u32, rings: u32, segments: u32) -> Vec<(u32, u32, [f32; 4], f32)> {
+    let mut out = Vec::new();
+    for t in scene(width, height, rings, segments) {
+        let [r, g, b] = t.color;
+        rasterize(&t, width, height, |x, y, z| out.push((x, y, [r, g, b, t.alpha], z)));
+    }
+    out
+}

@@ -111,52 +111,12 @@ fn gpu_words(gpu: &mlab_gpu::Gpu, which: u32) -> Vec<u32> {
     let groups = CASES / 64;
     let (gx, gy) = (65535u32.min(groups), groups.div_ceil(65535u32.min(groups)));
     let size = u64::from(CASES) * 4;
-    let out = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size,
-        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-        mapped_at_creation: false,
-    });
-    let back = device.create_buffer(&wgpu::BufferDescriptor {
-        label: None,
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
     let n = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: None,
         contents: bytemuck::cast_slice(&[CASES, gx * 64, which, 0]),
         usage: wgpu::BufferUsages::UNIFORM,
     });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: out.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: n.as_entire_binding(),
-            },
-        ],
-    });
-    let mut encoder = device.create_command_encoder(&Default::default());
-    {
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(gx, gy, 1);
-    }
-    encoder.copy_buffer_to_buffer(&out, 0, &back, 0, size);
-    gpu.queue().submit([encoder.finish()]);
-    back.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("map"));
-    device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
-    let view = back.slice(..).get_mapped_range().expect("mapped");
-    view.chunks_exact(4)
-        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-        .collect()
+    common::dispatch_words(gpu, &pipeline, &[], &n, (gx, gy), size)
 }
 
 #[test]

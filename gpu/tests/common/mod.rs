@@ -4,6 +4,57 @@
 
 use mlab_gpu::{Gpu, GpuFragment};
 
+/// Run `pipeline` over `gx * gy` workgroups with bind group 0 = `inputs` (bindings `0..`), an
+/// output storage buffer of `size` bytes, then `uniform`; read the output back as u32 words.
+pub fn dispatch_words(
+    gpu: &Gpu,
+    pipeline: &wgpu::ComputePipeline,
+    inputs: &[&wgpu::Buffer],
+    uniform: &wgpu::Buffer,
+    (gx, gy): (u32, u32),
+    size: u64,
+) -> Vec<u32> {
+    let device = gpu.device();
+    let buffer = |usage| {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: None,
+            size,
+            usage,
+            mapped_at_creation: false,
+        })
+    };
+    let out = buffer(wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC);
+    let back = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    let buffers: Vec<&wgpu::Buffer> = inputs.iter().copied().chain([&out, uniform]).collect();
+    let entries: Vec<wgpu::BindGroupEntry> = (0u32..)
+        .zip(&buffers)
+        .map(|(binding, b)| wgpu::BindGroupEntry {
+            binding,
+            resource: b.as_entire_binding(),
+        })
+        .collect();
+    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: None,
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(gx, gy, 1);
+    }
+    encoder.copy_buffer_to_buffer(&out, 0, &back, 0, size);
+    gpu.queue().submit([encoder.finish()]);
+    back.slice(..).map_async(wgpu::MapMode::Read, |r| r.expect("map"));
+    device.poll(wgpu::PollType::wait_indefinitely()).expect("poll");
+    let view = back.slice(..).get_mapped_range().expect("mapped");
+    view.chunks_exact(4)
+        .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect()
+}
+
 /// The GPU, or `None` with a skip line when there is no Vulkan adapter and `CI` is not `true`.
 /// Under `CI=true` a missing adapter fails the test.
 pub fn gpu(test: &str) -> Option<Gpu> {
