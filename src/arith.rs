@@ -40,6 +40,8 @@
 //! [`PaperTail`]: crate::hybrid::PaperTail
 //! [`Tail`]: crate::hybrid::Tail
 
+use core::hint::select_unpredictable;
+
 use crate::fragment::Fragment;
 use crate::row::Row;
 use crate::tail::{PaperTail, Tail, TailFormat};
@@ -86,7 +88,8 @@ pub trait Arithmetic:
     #[doc(hidden)]
     #[inline(always)]
     fn merge_pair(a_first: bool, a: Row, b: Row) -> Row {
-        let (front, back) = if a_first { (a, b) } else { (b, a) };
+        // Branchless, as Listing 1's swaps: the depth order of an unsorted stream is random.
+        let (front, back) = (select_unpredictable(a_first, a, b), select_unpredictable(a_first, b, a));
         Self::merge(front, back)
     }
 }
@@ -142,7 +145,8 @@ impl Arithmetic for Unbiased {
     #[inline(always)]
     fn merge_pair(a_first: bool, a: Row, b: Row) -> Row {
         let d = merge_dither(a, b); // = merge_dither(b, a): the hash is symmetric
-        let (front, back) = if a_first { (a, b) } else { (b, a) };
+        // Branchless, as Listing 1's swaps: the depth order of an unsorted stream is random.
+        let (front, back) = (select_unpredictable(a_first, a, b), select_unpredictable(a_first, b, a));
         unbiased_merge(front, back, d)
     }
 
