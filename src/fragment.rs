@@ -142,38 +142,24 @@ impl Fragment {
     /// outside `[0, 1]`, premultiplied color above 1).
     #[inline]
     pub fn premultiplied(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
-        // One test of every bound (four lanes at once; a NaN fails every comparison), then
-        // the documented order of errors only for a fragment that fails it.
-        let v = color.extend(alpha);
-        if (v.cmpge(Vec4::ZERO) & v.cmple(Vec4::ONE)).all() & (depth.abs() < f32::INFINITY) {
-            return Ok(Fragment { color, alpha, depth });
-        }
-        Self::premultiplied_error(color.x, color.y, color.z, alpha, depth)
-    }
-
-    /// The error of an invalid premultiplied fragment, in the documented order.
-    #[cold]
-    #[inline(never)]
-    // Channels as scalars: they travel in registers, so the hot path stores nothing for it.
-    fn premultiplied_error(r: f32, g: f32, b: f32, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
-        let color = Vec3::new(r, g, b);
-        Self::check_nans(color, alpha, depth)?;
-        check_infinities(color, depth)?;
-        check_color(color)?;
-        check_alpha(alpha)?;
-        check_premultiplied(color)?;
-        Ok(Fragment { color, alpha, depth })
+        Self::checked(color, color, alpha, depth, false)
     }
 
     /// A fragment from straight (non-premultiplied) color, alpha and depth. The stored color is
     /// `color * alpha` (one f32 multiply per channel), which must not exceed 1.
     #[inline]
     pub fn straight(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
-        // As `premultiplied`: one test of every bound, the ordered checks only for a fragment
-        // that fails it. A straight color may exceed 1, its product with alpha may not; an
-        // infinite channel fails `pre <= 1` (its product is infinite, or NaN at alpha 0), so
-        // `color >= 0` and `pre <= 1` are the whole color test.
-        let pre = color * alpha;
+        // A straight color may exceed 1, its product with alpha may not; an infinite channel
+        // fails `pre <= 1` (its product is infinite, or NaN at alpha 0), so `color >= 0` and
+        // `pre <= 1` are the whole color test.
+        Self::checked(color, color * alpha, alpha, depth, true)
+    }
+
+    /// The fragment of premultiplied color `pre` (`color` itself, or straight `color` times
+    /// alpha): one test of every bound (four lanes at once; a NaN fails every comparison),
+    /// then the documented order of errors only for a fragment that fails it.
+    #[inline(always)]
+    fn checked(color: Vec3, pre: Vec3, alpha: f32, depth: f32, straight: bool) -> Result<Fragment, FragmentError> {
         let low = color.extend(alpha).cmpge(Vec4::ZERO);
         let high = pre.extend(alpha).cmple(Vec4::ONE);
         if (low & high).all() & (depth.abs() < f32::INFINITY) {
@@ -183,21 +169,21 @@ impl Fragment {
                 depth,
             });
         }
-        Self::straight_error(color.x, color.y, color.z, alpha, depth)
+        Self::error(color.x, color.y, color.z, alpha, depth, straight)
     }
 
-    /// The error of an invalid straight fragment, in the documented order (or, where none
-    /// is found, the fragment).
+    /// The error of an invalid fragment (`straight`: its color is straight), in the
+    /// documented order (or, where none is found, the fragment).
     #[cold]
     #[inline(never)]
     // Channels as scalars: they travel in registers, so the hot path stores nothing for it.
-    fn straight_error(r: f32, g: f32, b: f32, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
+    fn error(r: f32, g: f32, b: f32, alpha: f32, depth: f32, straight: bool) -> Result<Fragment, FragmentError> {
         let color = Vec3::new(r, g, b);
         Self::check_nans(color, alpha, depth)?;
         check_infinities(color, depth)?;
         check_color(color)?;
         check_alpha(alpha)?;
-        let pre = color * alpha;
+        let pre = if straight { color * alpha } else { color };
         check_premultiplied(pre)?;
         Ok(Fragment {
             color: pre,

@@ -94,3 +94,34 @@ impl<T: TailFormat> Slot<T> for T {
         *self = value;
     }
 }
+
+/// A lane type that holds one layer of a span: 8 whole rows, read and written at once. Its
+/// [`Slot`]s are a layer of rows and a layer of tails (8 bytes each, the same bits).
+pub(crate) trait Layer8: Copy {
+    /// The lanes of 8 rows.
+    fn from_rows(rows: [Row; 8]) -> Self;
+    /// The 8 rows of the lanes.
+    fn to_rows(self) -> [Row; 8];
+}
+
+impl<L: Layer8> Slot<L> for [Row; 8] {
+    #[inline(always)]
+    fn load(&self) -> L {
+        L::from_rows(*self)
+    }
+    #[inline(always)]
+    fn store(&mut self, value: L) {
+        *self = value.to_rows();
+    }
+}
+
+impl<L: Layer8, T: TailFormat> Slot<L> for [T; 8] {
+    #[inline(always)]
+    fn load(&self) -> L {
+        L::from_rows(bytemuck::cast(*self))
+    }
+    #[inline(always)]
+    fn store(&mut self, value: L) {
+        *self = bytemuck::cast(value.to_rows());
+    }
+}

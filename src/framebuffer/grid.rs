@@ -8,7 +8,7 @@ use core::fmt::Debug;
 use core::marker::PhantomData;
 
 use super::pixel::Pixel;
-use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
+use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, each_span, write_lines};
 use crate::lanes::{LANES, LANES_U32, ResolvedLanes};
 use crate::resolve::{Background, Resolved, to_rgba16f};
 use crate::row::Row;
@@ -48,21 +48,10 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
     fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row);
     #[doc(hidden)]
     fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8);
+    /// The storage of span `span` of line `y` (1 to 8 consecutive pixels, or one stored
+    /// span), if it exists.
     #[doc(hidden)]
-    fn resolve_span<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32) -> Option<ResolvedLanes>;
-    #[doc(hidden)]
-    fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES];
-    /// Eq. 5 on one whole span of storage (8 consecutive pixels, or one stored span).
-    #[doc(hidden)]
-    fn whole<P: Pixel>(unit: &[Row]) -> ResolvedLanes;
-    /// The whole spans of one line (`line`: the line's rows) straight to RGBA8.
-    #[doc(hidden)]
-    fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background);
-    /// Whether whole-frame resolves walk whole spans line by line (else span by span).
-    #[doc(hidden)]
-    fn line_loop<P: Pixel>() -> bool {
-        true
-    }
+    fn span_unit(rows: &[Row], d: Dims, rows_per_pixel: usize, span: u32, y: u32) -> Option<&[Row]>;
 }
 
 /// Unit `i` of `n` rows.
@@ -89,15 +78,6 @@ fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
 fn units<P: Pixel, T>(line: &[Row], out: &mut [[T; LANES]], f: impl Fn(&[Row]) -> [T; LANES]) {
     for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * P::ROWS)) {
         *o = f(u);
-    }
-}
-
-impl PixelMajor {
-    /// Pixel index of the first pixel of span `span` of line `y` and the pixels of it inside.
-    #[inline(always)]
-    fn span_start(d: Dims, span: u32, y: u32) -> Option<(usize, usize)> {
-        let x = span.checked_mul(LANES_U32).filter(|&x| x < d.width && y < d.height)?;
-        Some((d.index_unchecked(x, y), d.lanes_inside(x)))
     }
 }
 
@@ -142,39 +122,15 @@ impl Arrangement for PixelMajor {
         let first = d.index_unchecked(x, y);
         let valid = d.lanes_inside(x);
         if let Some(px) = rows.get_mut(first * P::ROWS..(first + valid) * P::ROWS) {
-            P::pm_insert_span(px, span, mask);
+            P::insert_unit::<Self>(px, span, mask);
         }
     }
 
     #[inline(always)]
-    fn resolve_span<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32) -> Option<ResolvedLanes> {
-        let (first, valid) = Self::span_start(d, span, y)?;
-        rows.get(first * P::ROWS..(first + valid) * P::ROWS)
-            .map(P::pm_resolve_span)
-    }
-
-    #[inline(always)]
-    fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES] {
-        match Self::span_start(d, span, y)
-            .and_then(|(first, valid)| rows.get(first * P::ROWS..(first + valid) * P::ROWS))
-        {
-            Some(px) => P::pm_resolve_span_rgba8(px, bg),
-            None => P::clear_rgba8(bg),
-        }
-    }
-
-    #[inline(always)]
-    fn whole<P: Pixel>(unit: &[Row]) -> ResolvedLanes {
-        P::pm_resolve_span(unit)
-    }
-
-    #[inline(always)]
-    fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background) {
-        P::pm_resolve_line_rgba8(line, out, bg);
-    }
-
-    fn line_loop<P: Pixel>() -> bool {
-        P::PIXEL_MAJOR_LINE_LOOP
+    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]> {
+        let x = span.checked_mul(LANES_U32).filter(|&x| x < d.width && y < d.height)?;
+        let first = d.index_unchecked(x, y);
+        rows.get(first * n..(first + d.lanes_inside(x)) * n)
     }
 }
 
@@ -232,38 +188,18 @@ impl Arrangement for Spans {
         if m0 != 0
             && let Some(s) = unit_mut(rows, i, LANES * P::ROWS)
         {
-            P::span_insert_span(s, &span, m0);
+            P::insert_unit::<Self>(s, &span, m0);
         }
         if m1 != 0
             && let Some(s) = unit_mut(rows, i + 1, LANES * P::ROWS)
         {
-            P::span_insert_span(s, &span, m1);
+            P::insert_unit::<Self>(s, &span, m1);
         }
     }
 
     #[inline(always)]
-    fn resolve_span<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32) -> Option<ResolvedLanes> {
-        d.span_index(span, y)
-            .and_then(|i| unit(rows, i, LANES * P::ROWS))
-            .map(P::span_resolve)
-    }
-
-    #[inline(always)]
-    fn resolve_span_rgba8<P: Pixel>(rows: &[Row], d: Dims, span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES] {
-        match d.span_index(span, y).and_then(|i| unit(rows, i, LANES * P::ROWS)) {
-            Some(s) => P::span_resolve_rgba8(s, bg),
-            None => P::clear_rgba8(bg),
-        }
-    }
-
-    #[inline(always)]
-    fn whole<P: Pixel>(unit: &[Row]) -> ResolvedLanes {
-        P::span_resolve(unit)
-    }
-
-    #[inline(always)]
-    fn line_rgba8<P: Pixel>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background) {
-        P::span_resolve_line_rgba8(line, out, bg);
+    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]> {
+        unit(rows, d.span_index(span, y)?, LANES * n)
     }
 }
 
@@ -364,11 +300,11 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
 impl<P: Pixel, L: Arrangement> Grid<'_, P, L> {
     /// Span `span` of line `y` resolved, clear where it does not exist.
     fn lanes(&self, span: u32, y: u32) -> ResolvedLanes {
-        L::resolve_span::<P>(self.rows, self.dims, span, y).unwrap_or(CLEAR_LANES)
+        self.resolve_span(span, y).unwrap_or(CLEAR_LANES)
     }
 
-    /// Write a whole-frame resolve: whole spans by `whole` on their storage unit, line by line
-    /// (no per-span index maths or bounds checks), partial last spans by `edge`.
+    /// Write a whole-frame resolve: whole spans by `whole` from their line's rows (no
+    /// per-span index maths or bounds checks), partial last spans by `edge`.
     #[inline(always)]
     fn write<T: Copy>(
         &self,
@@ -376,11 +312,12 @@ impl<P: Pixel, L: Arrangement> Grid<'_, P, L> {
         whole: impl Fn(&[Row], &mut [[T; LANES]]),
         edge: impl Fn(u32, u32) -> [T; LANES],
     ) -> Result<(), FramebufferError> {
-        if !L::line_loop::<P>() {
-            return write_spans(self.dims, out, edge);
+        if !(L::SPANS || P::PIXEL_MAJOR_LINE_LOOP) {
+            return write_lines(self.dims, out, each_span(&edge), &edge);
         }
-        let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
-        write_lines(self.dims, out, self.rows, line_rows, whole, edge)
+        let n = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
+        let line = |y: u32| self.rows.get(y as usize * n..(y as usize + 1) * n).unwrap_or(&[]);
+        write_lines(self.dims, out, |y, spans| whole(line(y), spans), edge)
     }
 }
 
@@ -431,27 +368,31 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
 
     #[inline]
     fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes> {
-        L::resolve_span::<P>(self.rows, self.dims, span, y)
+        L::span_unit(self.rows, self.dims, P::ROWS, span, y).map(P::resolve_unit::<L>)
     }
 
     #[inline]
     fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
-        L::resolve_span_rgba8::<P>(self.rows, self.dims, span, y, background)
+        match L::span_unit(self.rows, self.dims, P::ROWS, span, y) {
+            Some(u) => P::resolve_unit_rgba8::<L>(u, background),
+            None => P::clear_rgba8(background),
+        }
     }
 
     fn resolve_into(&self, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
-        let whole = |line: &[Row], o: &mut [[Vec4; LANES]]| units::<P, _>(line, o, |u| L::whole::<P>(u).pixels(bg));
+        let whole =
+            |line: &[Row], o: &mut [[Vec4; LANES]]| units::<P, _>(line, o, |u| P::resolve_unit::<L>(u).pixels(bg));
         self.write(out, whole, |s, y| self.lanes(s, y).pixels(bg))
     }
 
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], bg: Background) -> Result<(), FramebufferError> {
-        let whole = |line: &[Row], o: &mut [[[u8; 4]; LANES]]| L::line_rgba8::<P>(line, o, bg);
+        let whole = |line: &[Row], o: &mut [[[u8; 4]; LANES]]| P::resolve_line_rgba8::<L>(line, o, bg);
         self.write(out, whole, |s, y| self.resolve_span_rgba8(s, y, bg))
     }
 
     fn resolve_rgba16f(&self, out: &mut [[f16; 4]], bg: Background) -> Result<(), FramebufferError> {
         let px = |r: ResolvedLanes| r.pixels(bg).map(to_rgba16f);
-        let whole = |line: &[Row], o: &mut [[[f16; 4]; LANES]]| units::<P, _>(line, o, |u| px(L::whole::<P>(u)));
+        let whole = |line: &[Row], o: &mut [[[f16; 4]; LANES]]| units::<P, _>(line, o, |u| px(P::resolve_unit::<L>(u)));
         self.write(out, whole, |s, y| px(self.lanes(s, y)))
     }
 

@@ -157,42 +157,11 @@ impl Dims {
     }
 }
 
-/// Write the 8 lanes of each span (`span(span_index_in_line, y)`) into a row-major output
-/// of `width * height` pixels, dropping lanes past the right edge.
-#[expect(
-    clippy::cast_possible_truncation,
-    reason = "span and line indices are below the u32 width and height"
-)]
-pub(crate) fn write_spans<T: Copy>(
-    d: Dims,
-    out: &mut [T],
-    span: impl Fn(u32, u32) -> [T; LANES],
-) -> Result<(), FramebufferError> {
-    let width = d.width;
-    d.check_output(out.len())?;
-    if width == 0 {
-        return Ok(());
-    }
-    for (y, line) in out.chunks_exact_mut(width as usize).enumerate() {
-        // Whole spans as arrays: a fixed-size store each. (A copy of `o.len()` elements, the
-        // same for every chunk, compiled to a call to `memmove` per span: 16-22 % of an RGBA8
-        // resolve at M = 1.) The loop of `write_lines`, kept apart: through its closure the
-        // span resolves ran 2 more instructions per span (callgrind, MLAB spans).
-        let (whole, rest) = line.as_chunks_mut::<LANES>();
-        for (sx, o) in whole.iter_mut().enumerate() {
-            *o = span(sx as u32, y as u32);
-        }
-        if !rest.is_empty() {
-            let px = span(whole.len() as u32, y as u32);
-            rest.copy_from_slice(&px[..rest.len()]);
-        }
-    }
-    Ok(())
-}
-
-/// [`write_spans`] with the whole spans of each line written by `whole` from the line's
-/// `line_rows` rows of `rows` (a framebuffer's own loop, without index maths or a bounds
-/// check per span), the partial last span by `edge`.
+/// Write a whole-frame resolve into a row-major output of `width * height` pixels, line by
+/// line: the whole 8-pixel spans of line `y` by `whole(y, spans)`, the partial last span by
+/// `edge(span, y)`, its lanes past the right edge dropped. Whole spans are written as arrays,
+/// a fixed-size store each (a copy of `o.len()` elements compiled to a call to `memmove` per
+/// span: 16-22 % of an RGBA8 resolve at M = 1).
 #[expect(
     clippy::cast_possible_truncation,
     reason = "span and line indices are below the u32 width and height"
@@ -200,27 +169,33 @@ pub(crate) fn write_spans<T: Copy>(
 pub(crate) fn write_lines<T: Copy>(
     d: Dims,
     out: &mut [T],
-    rows: &[Row],
-    line_rows: usize,
-    whole: impl Fn(&[Row], &mut [[T; LANES]]),
+    whole: impl Fn(u32, &mut [[T; LANES]]),
     edge: impl Fn(u32, u32) -> [T; LANES],
 ) -> Result<(), FramebufferError> {
     d.check_output(out.len())?;
     if d.width == 0 {
         return Ok(());
     }
-    let lines = out
-        .chunks_exact_mut(d.width as usize)
-        .zip(rows.chunks_exact(line_rows.max(1)));
-    for (y, (line, src)) in lines.enumerate() {
+    for (y, line) in out.chunks_exact_mut(d.width as usize).enumerate() {
         let (spans, rest) = line.as_chunks_mut::<LANES>();
-        whole(src, spans);
+        whole(y as u32, spans);
         if !rest.is_empty() {
             let px = edge(spans.len() as u32, y as u32);
             rest.copy_from_slice(&px[..rest.len()]);
         }
     }
     Ok(())
+}
+
+/// The `whole` of [`write_lines`] span by span: `span(span, y)` for each whole span of line
+/// `y` (where no framebuffer has a faster loop over its storage).
+#[expect(clippy::cast_possible_truncation, reason = "span indices are below the u32 width")]
+pub(crate) fn each_span<T>(span: impl Fn(u32, u32) -> [T; LANES]) -> impl Fn(u32, &mut [[T; LANES]]) {
+    move |y, spans| {
+        for (sx, o) in spans.iter_mut().enumerate() {
+            *o = span(sx as u32, y);
+        }
+    }
 }
 
 /// Resolved lanes of nothing (lanes past the edge, or spans that cannot exist).
@@ -324,27 +299,14 @@ pub trait Framebuffer {
     /// ([`FragmentLanes::quantize_with`]); returns the lanes that were on but invalid (left
     /// untouched). Coordinates are checked first, for every lane that is on.
     #[inline]
-    fn insert_span_fragments(
-        &mut self,
-        x: u32,
-        y: u32,
-        fragments: &FragmentLanes,
-        mask: u8,
-    ) -> Result<InvalidLanes, FramebufferError> {
+    fn insert_span_fragments(&mut self, x: u32, y: u32, fragments: &FragmentLanes, mask: u8) -> SpanInsert {
         insert_fragments(self, x, y, fragments, mask, false)
     }
 
-    /// [`insert_span_fragments`](Self::insert_span_fragments) with straight (not
-    /// premultiplied) color: each channel is multiplied by alpha first
-    /// ([`FragmentLanes::quantize_straight_with`]).
+    /// [`insert_span_fragments`](Self::insert_span_fragments) with straight color (each
+    /// channel multiplied by alpha first, [`FragmentLanes::quantize_straight_with`]).
     #[inline]
-    fn insert_span_straight(
-        &mut self,
-        x: u32,
-        y: u32,
-        fragments: &FragmentLanes,
-        mask: u8,
-    ) -> Result<InvalidLanes, FramebufferError> {
+    fn insert_span_straight(&mut self, x: u32, y: u32, fragments: &FragmentLanes, mask: u8) -> SpanInsert {
         insert_fragments(self, x, y, fragments, mask, true)
     }
 
@@ -359,28 +321,27 @@ pub trait Framebuffer {
     /// Resolve every pixel into f32 RGBA, row-major (`width * height`): opaque over a
     /// background, or premultiplied ([`Resolved::pixel`]). Linear.
     fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
-        write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
-            self.resolve_span(s, y).unwrap_or(CLEAR_LANES).pixels(background)
-        })
+        let span = |s, y| self.resolve_span(s, y).unwrap_or(CLEAR_LANES).pixels(background);
+        write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
     }
 
     /// Resolve every pixel into RGBA8 (linear unorm8, not sRGB), row-major: MLAB the integer
     /// resolve, HT [`to_rgba8`](crate::to_rgba8) of the f32 resolve (see the trait docs);
     /// the same bytes as [`resolve_span_rgba8`](Self::resolve_span_rgba8) span by span.
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
-        write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
-            self.resolve_span_rgba8(s, y, background)
-        })
+        let span = |s, y| self.resolve_span_rgba8(s, y, background);
+        write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
     }
 
     /// Resolve every pixel into RGBA16F ([`to_rgba16f`], linear), row-major.
     fn resolve_rgba16f(&self, out: &mut [[f16; 4]], background: Background) -> Result<(), FramebufferError> {
-        write_spans(Dims::new(self.width(), self.height()), out, |s, y| {
+        let span = |s, y| {
             self.resolve_span(s, y)
                 .unwrap_or(CLEAR_LANES)
                 .pixels(background)
                 .map(to_rgba16f)
-        })
+        };
+        write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
     }
 
     /// Split into bands of `lines` lines (the last one may be shorter), each a framebuffer
@@ -407,6 +368,9 @@ pub trait Framebuffer {
     }
 }
 
+/// What a span insert of fragments returns: the lanes refused, or why nothing changed.
+type SpanInsert = Result<InvalidLanes, FramebufferError>;
+
 /// Check the lanes' pixels, validate and quantize (straight or premultiplied color), insert
 /// the valid lanes: [`Framebuffer::insert_span_fragments`] and `insert_span_straight`.
 #[inline(always)]
@@ -417,7 +381,7 @@ fn insert_fragments<F: Framebuffer + ?Sized>(
     fragments: &FragmentLanes,
     mask: u8,
     straight: bool,
-) -> Result<InvalidLanes, FramebufferError> {
+) -> SpanInsert {
     Dims::new(fb.width(), fb.height()).check_span(x, y, mask)?;
     let q = if straight {
         fragments.quantize_straight_with::<F::Arith>(mask)

@@ -11,7 +11,7 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::{CLEAR_LANES, Layers, clear_rgba8};
+use super::{Arrangement, CLEAR_LANES, Layers, clear_rgba8};
 use crate::arith::{Arithmetic, Unbiased};
 use crate::hybrid::{self, TailFormat};
 use crate::lanes::{self, LANES, ResolvedLanes};
@@ -68,30 +68,31 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// Slot `j` of an empty pixel.
     #[doc(hidden)]
     fn empty_slot(j: usize) -> Row;
+    /// Listing 1 or 2 on one pixel-major pixel (`px`: its `ROWS` slots).
     #[doc(hidden)]
     fn pm_insert(px: &mut [Row], row: Row);
-    #[doc(hidden)]
-    fn pm_insert_span(px: &mut [Row], rows: &[Row; LANES], mask: u8);
-    #[doc(hidden)]
-    fn pm_resolve_span(px: &[Row]) -> ResolvedLanes;
-    #[doc(hidden)]
-    fn pm_resolve_span_rgba8(px: &[Row], background: Background) -> [[u8; 4]; LANES];
-    /// The whole spans of one line (`line`: its pixels' rows), into `out`.
-    #[doc(hidden)]
-    fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background);
+    /// Listing 1 or 2 on lane `lane` of a stored span (`8 * ROWS` rows, layer-major).
     #[doc(hidden)]
     fn span_insert(span: &mut [Row], lane: usize, row: Row);
+    /// A span insert, for the lanes set in `mask`, into the storage `unit` of one span in the
+    /// arrangement `L`: a stored span, or 1 to 8 consecutive pixel-major pixels (the lanes
+    /// past them are off).
     #[doc(hidden)]
-    fn span_insert_span(span: &mut [Row], rows: &[Row; LANES], mask: u8);
+    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], mask: u8);
+    /// The f32 resolve of the storage of one span (as for `insert_unit`), lanes past its
+    /// pixels clear.
     #[doc(hidden)]
-    fn span_resolve(span: &[Row]) -> ResolvedLanes;
+    fn resolve_unit<L: Arrangement>(unit: &[Row]) -> ResolvedLanes;
+    /// The RGBA8 resolve of the storage of one span, as this kind writes RGBA8.
     #[doc(hidden)]
-    fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES];
-    /// The whole stored spans of one line (`line`: its spans' rows), into `out`.
+    fn resolve_unit_rgba8<L: Arrangement>(unit: &[Row], background: Background) -> [[u8; 4]; LANES];
+    /// [`resolve_unit_rgba8`](Self::resolve_unit_rgba8) of the whole spans of one line
+    /// (`line`: the line's rows), into `out`.
     #[doc(hidden)]
-    fn span_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
-        for (o, s) in out.iter_mut().zip(line.chunks_exact(LANES * Self::ROWS)) {
-            *o = Self::span_resolve_rgba8(s, background);
+    #[inline(always)]
+    fn resolve_line_rgba8<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
+        for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * Self::ROWS)) {
+            *o = Self::resolve_unit_rgba8::<L>(u, background);
         }
     }
     /// The RGBA8 of 8 empty pixels (a span that does not exist), as this kind's RGBA8
@@ -164,10 +165,22 @@ fn layers_mut<const N: usize>(rows: &mut [Row]) -> Option<&mut [[Row; LANES]; N]
 }
 
 impl<const M: usize, A: Arithmetic> Mlab<M, A> {
-    /// The 8 pixels of `px` as arrays, when all 8 are there.
+    /// `span(layers)` of the storage of one span in the arrangement `L` (pixel-major pixels
+    /// gathered into layers, empty rows past them), or `whole(pixels)` of 8 whole
+    /// pixel-major pixels, which a resolve reads without the transpose.
     #[inline(always)]
-    fn whole(px: &[Row]) -> Option<&[[Row; M]; LANES]> {
-        px.as_chunks::<M>().0.try_into().ok()
+    fn view<L: Arrangement, R>(
+        unit: &[Row],
+        span: impl FnOnce(&[[Row; LANES]; M]) -> R,
+        whole: impl FnOnce(&[[Row; M]; LANES]) -> R,
+    ) -> Option<R> {
+        if L::SPANS {
+            return layers::<M>(unit).map(span);
+        }
+        Some(match unit.as_chunks::<M>().0.try_into() {
+            Ok(px) => whole(px),
+            Err(_) => span(&gather::<M>(unit, M, 0, Row::EMPTY)),
+        })
     }
 }
 
@@ -208,42 +221,6 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
         }
     }
 
-    /// Gathers the pixels into a layer-major span, inserts in lanes, scatters back the lanes
-    /// that are on.
-    #[inline(always)]
-    fn pm_insert_span(px: &mut [Row], rows: &[Row; LANES], mask: u8) {
-        let mut span = gather::<M>(px, M, 0, Row::EMPTY);
-        lanes::mlab_insert_with::<A, M>(&mut span, rows, mask);
-        scatter::<M>(px, M, 0, mask, &span);
-    }
-
-    #[inline(always)]
-    fn pm_resolve_span(px: &[Row]) -> ResolvedLanes {
-        match Self::whole(px) {
-            Some(px) => lanes::mlab_resolve_pixel_major(px),
-            None => lanes::mlab_resolve(&gather::<M>(px, M, 0, Row::EMPTY)),
-        }
-    }
-
-    #[inline(always)]
-    fn pm_resolve_span_rgba8(px: &[Row], background: Background) -> [[u8; 4]; LANES] {
-        match Self::whole(px) {
-            Some(px) => lanes::mlab_resolve_pixel_major_rgba8(px, background),
-            None => lanes::mlab_resolve_rgba8(&gather::<M>(px, M, 0, Row::EMPTY), background),
-        }
-    }
-
-    #[inline(always)]
-    fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
-        lanes::mlab_resolve_pixel_major_line_rgba8(line.as_chunks::<M>().0.as_chunks::<LANES>().0, out, background);
-    }
-
-    #[inline(always)]
-    fn span_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
-        let spans: &[[[Row; LANES]; M]] = line.as_chunks::<LANES>().0.as_chunks::<M>().0;
-        lanes::mlab_resolve_line_rgba8(spans, out, background);
-    }
-
     /// With AVX, a span insert of one lane; without, the pixel's rows gathered, Listing 1 in
     /// scalar code, scattered back (the faster of the two on each, `docs/performance.md`).
     /// The same rows either way.
@@ -260,23 +237,37 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
         }
     }
 
+    /// Pixel-major: the pixels gathered into a layer-major span, inserted in lanes, the
+    /// lanes that are on scattered back.
     #[inline(always)]
-    fn span_insert_span(span: &mut [Row], rows: &[Row; LANES], mask: u8) {
-        if let Some(l) = layers_mut::<M>(span) {
+    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], mask: u8) {
+        if !L::SPANS {
+            let mut span = gather::<M>(unit, M, 0, Row::EMPTY);
+            lanes::mlab_insert_with::<A, M>(&mut span, rows, mask);
+            scatter::<M>(unit, M, 0, mask, &span);
+        } else if let Some(l) = layers_mut::<M>(unit) {
             lanes::mlab_insert_with::<A, M>(l, rows, mask);
         }
     }
 
     #[inline(always)]
-    fn span_resolve(span: &[Row]) -> ResolvedLanes {
-        layers::<M>(span).map_or(CLEAR_LANES, lanes::mlab_resolve)
+    fn resolve_unit<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
+        Self::view::<L, _>(unit, lanes::mlab_resolve, lanes::mlab_resolve_pixel_major).unwrap_or(CLEAR_LANES)
     }
 
     #[inline(always)]
-    fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
-        match layers::<M>(span) {
-            Some(l) => lanes::mlab_resolve_rgba8(l, background),
-            None => Self::clear_rgba8(background),
+    fn resolve_unit_rgba8<L: Arrangement>(unit: &[Row], bg: Background) -> [[u8; 4]; LANES] {
+        let span = |l: &[[Row; LANES]; M]| lanes::mlab_resolve_rgba8(l, bg);
+        let whole = |px: &[[Row; M]; LANES]| lanes::mlab_resolve_pixel_major_rgba8(px, bg);
+        Self::view::<L, _>(unit, span, whole).unwrap_or_else(|| Self::clear_rgba8(bg))
+    }
+
+    #[inline(always)]
+    fn resolve_line_rgba8<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: Background) {
+        if L::SPANS {
+            lanes::mlab_resolve_line_rgba8(line.as_chunks::<LANES>().0.as_chunks::<M>().0, out, bg);
+        } else {
+            lanes::mlab_resolve_pixel_major_line_rgba8(line.as_chunks::<M>().0.as_chunks::<LANES>().0, out, bg);
         }
     }
 
@@ -323,6 +314,17 @@ impl<const K: usize, A: Arithmetic> Ht<K, A> {
             }
         }
         (head, bytemuck::cast(tails))
+    }
+
+    /// `f(head, tails)` of the storage of one span in the arrangement `L` (pixel-major pixels
+    /// gathered, empty rows and tails past them).
+    #[inline(always)]
+    fn view<L: Arrangement, R>(unit: &[Row], f: impl FnOnce(&[[Row; LANES]; K], &[A::Tail; LANES]) -> R) -> Option<R> {
+        if L::SPANS {
+            return Self::parts(unit).map(|(h, t)| f(h, t));
+        }
+        let (head, tails) = Self::gather(unit);
+        Some(f(&head, &tails))
     }
 
     /// Head layers and tails of a stored span.
@@ -384,36 +386,6 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         }
     }
 
-    /// Gathers the pixels' heads and tails, inserts in lanes, scatters back the lanes that
-    /// are on.
-    #[inline(always)]
-    fn pm_insert_span(px: &mut [Row], rows: &[Row; LANES], mask: u8) {
-        let (mut head, mut tails) = Self::gather(px);
-        lanes::hybrid_insert_parts(&mut head, &mut tails, rows, mask);
-        scatter::<K>(px, K + 1, 0, mask, &head);
-        let tails: [Row; LANES] = bytemuck::cast(tails);
-        scatter::<1>(px, K + 1, K, mask, &[tails]);
-    }
-
-    #[inline(always)]
-    fn pm_resolve_span(px: &[Row]) -> ResolvedLanes {
-        let (head, tails) = Self::gather(px);
-        lanes::hybrid_resolve_parts(&head, &tails)
-    }
-
-    #[inline(always)]
-    fn pm_resolve_span_rgba8(px: &[Row], background: Background) -> [[u8; 4]; LANES] {
-        let (head, tails) = Self::gather(px);
-        lanes::hybrid_resolve_parts_rgba8(&head, &tails, background)
-    }
-
-    #[inline(always)]
-    fn pm_resolve_line_rgba8(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: Background) {
-        for (o, px) in out.iter_mut().zip(line.chunks_exact(LANES * (K + 1))) {
-            *o = Self::pm_resolve_span_rgba8(px, background);
-        }
-    }
-
     /// The pixel's head rows and tail gathered, Listing 2 in scalar code, scattered back:
     /// one pixel does not pay for eight lanes (`docs/performance.md`).
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
@@ -427,23 +399,31 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         }
     }
 
+    /// Pixel-major: the pixels' heads and tails gathered, inserted in lanes, the lanes that
+    /// are on scattered back.
     #[inline(always)]
-    fn span_insert_span(span: &mut [Row], rows: &[Row; LANES], mask: u8) {
-        if let Some((head, tails)) = Self::parts_mut(span) {
-            lanes::hybrid_insert_parts(head, tails, rows, mask);
+    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], mask: u8) {
+        if L::SPANS {
+            if let Some((head, tails)) = Self::parts_mut(unit) {
+                lanes::hybrid_insert_parts(head, tails, rows, mask);
+            }
+            return;
         }
+        let (mut head, mut tails) = Self::gather(unit);
+        lanes::hybrid_insert_parts(&mut head, &mut tails, rows, mask);
+        scatter::<K>(unit, K + 1, 0, mask, &head);
+        let tails: [Row; LANES] = bytemuck::cast(tails);
+        scatter::<1>(unit, K + 1, K, mask, &[tails]);
     }
 
     #[inline(always)]
-    fn span_resolve(span: &[Row]) -> ResolvedLanes {
-        Self::parts(span).map_or(CLEAR_LANES, |(h, t)| lanes::hybrid_resolve_parts(h, t))
+    fn resolve_unit<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
+        Self::view::<L, _>(unit, lanes::hybrid_resolve_parts).unwrap_or(CLEAR_LANES)
     }
 
     #[inline(always)]
-    fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
-        match Self::parts(span) {
-            Some((h, t)) => lanes::hybrid_resolve_parts_rgba8(h, t, background),
-            None => clear_rgba8(background),
-        }
+    fn resolve_unit_rgba8<L: Arrangement>(unit: &[Row], bg: Background) -> [[u8; 4]; LANES] {
+        Self::view::<L, _>(unit, |h, t| lanes::hybrid_resolve_parts_rgba8(h, t, bg))
+            .unwrap_or_else(|| Self::clear_rgba8(bg))
     }
 }

@@ -17,7 +17,7 @@ use super::LANES;
 use crate::arith::{Arithmetic, Kind};
 use crate::row::Row;
 use crate::tail::{Layout, TailFormat};
-use crate::vector::{RowLanes, Slot};
+use crate::vector::{Layer8, RowLanes};
 use bytemuck::cast;
 use wide::{f32x16, f64x8, i16x32, u8x64, u16x32, u32x16, u64x8};
 
@@ -92,25 +92,14 @@ impl Rows8 {
     }
 }
 
-impl Slot<Rows8> for [Row; LANES] {
+impl Layer8 for Rows8 {
     #[inline(always)]
-    fn load(&self) -> Rows8 {
-        Rows8::load(self)
+    fn from_rows(rows: [Row; LANES]) -> Rows8 {
+        Rows8 { v: cast(rows) }
     }
     #[inline(always)]
-    fn store(&mut self, value: Rows8) {
-        *self = cast(value.v);
-    }
-}
-
-impl<T: TailFormat> Slot<Rows8> for [T; LANES] {
-    #[inline(always)]
-    fn load(&self) -> Rows8 {
-        Rows8 { v: cast(*self) }
-    }
-    #[inline(always)]
-    fn store(&mut self, value: Rows8) {
-        *self = cast(value.v);
+    fn to_rows(self) -> [Row; LANES] {
+        cast(self.v)
     }
 }
 

@@ -8,7 +8,7 @@ use crate::arith::{Arithmetic, Kind};
 use crate::resolve::{Background, FloatLanes};
 use crate::row::Row;
 use crate::tail::{Layout, TailFormat};
-use crate::vector::{RowLanes, Slot};
+use crate::vector::{Layer8, RowLanes};
 use bytemuck::cast;
 use wide::{f32x8, f64x4, i16x16, i32x8, u8x32, u16x16, u32x8, u64x4};
 
@@ -221,28 +221,6 @@ pub const BACKEND: &str = if cfg!(all(target_feature = "avx512f", target_feature
     "portable"
 };
 
-impl Slot<Rows8> for [Row; LANES] {
-    #[inline(always)]
-    fn load(&self) -> Rows8 {
-        Rows8::load(self)
-    }
-    #[inline(always)]
-    fn store(&mut self, value: Rows8) {
-        *self = value.store();
-    }
-}
-
-impl<T: TailFormat> Slot<Rows8> for [T; LANES] {
-    #[inline(always)]
-    fn load(&self) -> Rows8 {
-        Rows8::load_tails(self)
-    }
-    #[inline(always)]
-    fn store(&mut self, value: Rows8) {
-        *self = value.store_tails();
-    }
-}
-
 impl FloatLanes for f32x8 {
     type U = u32x8;
     type Mask = f32x8;
@@ -282,25 +260,49 @@ impl FloatLanes for f32x8 {
 }
 
 /// Eight rows (or eight tails), one per lane: lanes 0-3 in `a`, 4-7 in `b`, each 64-bit
-/// lane one whole row (`word0` in the low dword, `word1` in the high dword).
+/// lane one whole row (`word0` in the low dword, `word1` in the high dword). `SIGN`: whether
+/// its selects read only the sign bit of each 64-bit lane ([`Rows8`]) or a mask widened to
+/// whole rows ([`HtRows8`]).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Rows8 {
+pub(crate) struct Lanes8<const SIGN: bool> {
     a: u32x8,
     b: u32x8,
 }
 
-/// Per-lane mask for [`Rows8`]: all ones or all zeros over each 64-bit lane (with AVX, only
-/// the sign bit of each 64-bit lane is meaningful: see [`BLENDV_PD`]).
+/// The lanes of Listing 1 (MLAB): with AVX, a select of whole rows is `vblendvpd`, which
+/// reads only the sign bit of each 64-bit lane, that is the depth dword's compare result: the
+/// masks need no widening. Without AVX the select is bitwise and the masks are widened to
+/// whole lanes. Both give the same rows.
+pub(crate) type Rows8 = Lanes8<{ cfg!(target_feature = "avx") }>;
+
+/// The lanes of Listing 2 (the HT span insert): every select is a byte blend (`vpblendvb`
+/// with AVX2) on a mask widened to whole rows, never `vblendvpd`.
+///
+/// Listing 2 stores `select(swap, f, row)` back to the slot `row` was loaded from; with
+/// `vblendvpd`, LLVM 22 folds that store into `vmaskmovpd` (llvm/llvm-project#145176), which
+/// AMD CPUs microcode, seven per span insert at `K = 3`. With widened masks and byte blends
+/// the stores stay plain stores, for one more instruction per mask (`vmovshdup`).
+/// `docs/performance.md` measures both. Listing 1 keeps [`Rows8`]: its full-span inserts have
+/// no masked store to remove, and its instruction count would grow.
+#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
+pub(crate) type HtRows8 = Lanes8<false>;
+
+/// Per-lane mask for [`Lanes8`]: all ones or all zeros over each 64-bit lane (with `SIGN`,
+/// only the sign bit of each 64-bit lane is meaningful).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Mask8 {
+pub(crate) struct Mask8<const SIGN: bool> {
     a: u32x8,
     b: u32x8,
 }
 
-impl core::ops::BitAnd for Mask8 {
-    type Output = Mask8;
+/// The mask of [`HtRows8`].
+#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
+pub(crate) type HtMask8 = Mask8<false>;
+
+impl<const S: bool> core::ops::BitAnd for Mask8<S> {
+    type Output = Self;
     #[inline(always)]
-    fn bitand(self, rhs: Mask8) -> Mask8 {
+    fn bitand(self, rhs: Self) -> Self {
         Mask8 {
             a: self.a & rhs.a,
             b: self.b & rhs.b,
@@ -308,16 +310,16 @@ impl core::ops::BitAnd for Mask8 {
     }
 }
 
-impl Mask8 {
+impl<const S: bool> Mask8<S> {
     /// Every lane on.
-    pub(super) const ALL: Mask8 = Mask8 {
+    pub(super) const ALL: Self = Mask8 {
         a: u32x8::MAX,
         b: u32x8::MAX,
     };
 
     /// From a bitmask (bit `i` = lane `i`).
     #[inline(always)]
-    pub(super) fn from_bits(bits: u8) -> Mask8 {
+    pub(super) fn from_bits(bits: u8) -> Self {
         let v = u32x8::splat(bits as u32);
         let sa = u32x8::new([1, 1, 2, 2, 4, 4, 8, 8]);
         let sb = u32x8::new([16, 16, 32, 32, 64, 64, 128, 128]);
@@ -333,7 +335,7 @@ impl Mask8 {
 /// 4-7 in the second (high dwords don't-care). The eight folds share one register for the
 /// mix (pixels 0-3 in the low dwords, 4-7 in the high dwords).
 #[inline(always)]
-fn merge_dither8(front: Rows8, back: Rows8) -> (u16x16, u16x16) {
+fn merge_dither8<const S: bool>(front: Lanes8<S>, back: Lanes8<S>) -> (u16x16, u16x16) {
     let fa = front.a ^ back.a;
     let fb = front.b ^ back.b;
     // word0 ^ word1 of each pair: in the low dword for a, in the high dword for b.
@@ -349,45 +351,34 @@ fn merge_dither8(front: Rows8, back: Rows8) -> (u16x16, u16x16) {
     (d, db)
 }
 
-impl Rows8 {
+impl<const S: bool> Lanes8<S> {
     #[inline(always)]
-    pub(super) fn load(rows: &[Row; 8]) -> Rows8 {
-        let [a, b]: [u32x8; 2] = cast(*rows);
-        Rows8 { a, b }
+    pub(super) fn load(rows: &[Row; 8]) -> Self {
+        Self::from_rows(*rows)
     }
+}
 
+impl<const S: bool> Layer8 for Lanes8<S> {
     #[inline(always)]
-    fn store(self) -> [Row; 8] {
-        cast([self.a, self.b])
+    fn from_rows(rows: [Row; 8]) -> Self {
+        let [a, b]: [u32x8; 2] = cast(rows);
+        Lanes8 { a, b }
     }
-
     #[inline(always)]
-    fn load_tails<T: TailFormat>(tails: &[T; 8]) -> Rows8 {
-        let [a, b]: [u32x8; 2] = cast(*tails);
-        Rows8 { a, b }
-    }
-
-    #[inline(always)]
-    fn store_tails<T: TailFormat>(self) -> [T; 8] {
+    fn to_rows(self) -> [Row; 8] {
         cast([self.a, self.b])
     }
 }
 
-/// With AVX, a select of whole rows is `vblendvpd`, which reads only the sign bit of each
-/// 64-bit lane, that is the depth dword's compare result: the masks need no widening.
-/// Without AVX the select is bitwise and the masks are widened to whole lanes. Both give
-/// the same rows.
-const BLENDV_PD: bool = cfg!(target_feature = "avx");
-
-impl RowLanes for Rows8 {
-    type Mask = Mask8;
-    type Tail<T: TailFormat> = Rows8;
+impl<const S: bool> RowLanes for Lanes8<S> {
+    type Mask = Mask8<S>;
+    type Tail<T: TailFormat> = Self;
     #[inline(always)]
-    fn depth_le(self, other: Self) -> Mask8 {
+    fn depth_le(self, other: Self) -> Mask8<S> {
         let le = |x: u32x8, y: u32x8| {
             let m = cast::<f32x8, u32x8>(cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y)));
             // Only the high (depth) dword of each lane is meaningful.
-            if BLENDV_PD { m } else { widen_hi(m) }
+            if S { m } else { widen_hi(m) }
         };
         Mask8 {
             a: le(self.a, other.a),
@@ -395,15 +386,15 @@ impl RowLanes for Rows8 {
         }
     }
     #[inline(always)]
-    fn select(mask: Mask8, x: Self, y: Self) -> Self {
+    fn select(mask: Mask8<S>, x: Self, y: Self) -> Self {
         let sel = |m: u32x8, p: u32x8, q: u32x8| -> u32x8 {
-            if BLENDV_PD {
+            if S {
                 cast(cast::<u32x8, f64x4>(m).select(cast::<u32x8, f64x4>(p), cast::<u32x8, f64x4>(q)))
             } else {
                 m.select(p, q)
             }
         };
-        Rows8 {
+        Lanes8 {
             a: sel(mask.a, x.a, y.a),
             b: sel(mask.b, x.b, y.b),
         }
@@ -411,13 +402,13 @@ impl RowLanes for Rows8 {
     #[inline(always)]
     fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
         match A::KIND {
-            Kind::Paper => Rows8 {
+            Kind::Paper => Lanes8 {
                 a: merge4_paper(front.a, back.a),
                 b: merge4_paper(front.b, back.b),
             },
             Kind::Unbiased => {
                 let (da, db) = merge_dither8(front, back);
-                Rows8 {
+                Lanes8 {
                     a: merge4_unbiased(front.a, back.a, da),
                     b: merge4_unbiased(front.b, back.b, db),
                 }
@@ -425,122 +416,18 @@ impl RowLanes for Rows8 {
         }
     }
     #[inline(always)]
-    fn tail_add<T: TailFormat>(tail: Rows8, row: Self) -> Rows8 {
+    fn tail_add<T: TailFormat>(tail: Self, row: Self) -> Self {
         let f = match T::LAYOUT {
             Layout::Paper => tail_add4_paper,
             Layout::Wide => tail_add4_wide,
         };
-        Rows8 {
+        Lanes8 {
             a: f(tail.a, row.a),
             b: f(tail.b, row.b),
         }
     }
     #[inline(always)]
-    fn select_tail<T: TailFormat>(mask: Mask8, x: Rows8, y: Rows8) -> Rows8 {
-        Self::select(mask, x, y)
-    }
-}
-
-/// [`Rows8`] for Listing 2 (the HT span insert): the same lanes, but every select is a byte
-/// blend (`vpblendvb` with AVX2) on a mask widened to whole rows, never `vblendvpd`.
-///
-/// Listing 2 stores `select(swap, f, row)` back to the slot `row` was loaded from; with
-/// `vblendvpd`, LLVM 22 folds that store into `vmaskmovpd` (llvm/llvm-project#145176), which
-/// AMD CPUs microcode, seven per span insert at `K = 3`. With widened masks and byte blends
-/// the stores stay plain stores, for one more instruction per mask (`vmovshdup`).
-/// `docs/performance.md` measures both. Listing 1 keeps [`Rows8`]: its full-span inserts have
-/// no masked store to remove, and its instruction count would grow.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct HtRows8(Rows8);
-
-/// Per-lane mask for [`HtRows8`]: all ones or all zeros over each whole 64-bit lane.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct HtMask8(Mask8);
-
-impl core::ops::BitAnd for HtMask8 {
-    type Output = HtMask8;
-    #[inline(always)]
-    fn bitand(self, rhs: HtMask8) -> HtMask8 {
-        HtMask8(self.0 & rhs.0)
-    }
-}
-
-#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
-impl HtMask8 {
-    /// Every lane on.
-    pub(super) const ALL: HtMask8 = HtMask8(Mask8::ALL);
-
-    /// From a bitmask (bit `i` = lane `i`): already whole-lane.
-    #[inline(always)]
-    pub(super) fn from_bits(bits: u8) -> HtMask8 {
-        HtMask8(Mask8::from_bits(bits))
-    }
-}
-
-#[cfg_attr(all(target_feature = "avx512f", target_feature = "avx512bw"), allow(dead_code))]
-impl HtRows8 {
-    #[inline(always)]
-    pub(super) fn load(rows: &[Row; 8]) -> HtRows8 {
-        HtRows8(Rows8::load(rows))
-    }
-}
-
-impl Slot<HtRows8> for [Row; LANES] {
-    #[inline(always)]
-    fn load(&self) -> HtRows8 {
-        HtRows8(Rows8::load(self))
-    }
-    #[inline(always)]
-    fn store(&mut self, value: HtRows8) {
-        *self = value.0.store();
-    }
-}
-
-impl<T: TailFormat> Slot<HtRows8> for [T; LANES] {
-    #[inline(always)]
-    fn load(&self) -> HtRows8 {
-        HtRows8(Rows8::load_tails(self))
-    }
-    #[inline(always)]
-    fn store(&mut self, value: HtRows8) {
-        *self = value.0.store_tails();
-    }
-}
-
-impl RowLanes for HtRows8 {
-    type Mask = HtMask8;
-    type Tail<T: TailFormat> = HtRows8;
-    #[inline(always)]
-    fn depth_le(self, other: Self) -> HtMask8 {
-        let le = |x: u32x8, y: u32x8| {
-            widen_hi(cast::<f32x8, u32x8>(
-                cast::<u32x8, f32x8>(x).simd_le(cast::<u32x8, f32x8>(y)),
-            ))
-        };
-        let (x, y) = (self.0, other.0);
-        HtMask8(Mask8 {
-            a: le(x.a, y.a),
-            b: le(x.b, y.b),
-        })
-    }
-    #[inline(always)]
-    fn select(mask: HtMask8, x: Self, y: Self) -> Self {
-        let (m, x, y) = (mask.0, x.0, y.0);
-        HtRows8(Rows8 {
-            a: m.a.select(x.a, y.a),
-            b: m.b.select(x.b, y.b),
-        })
-    }
-    #[inline(always)]
-    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
-        HtRows8(Rows8::merge::<A>(front.0, back.0))
-    }
-    #[inline(always)]
-    fn tail_add<T: TailFormat>(tail: HtRows8, row: Self) -> HtRows8 {
-        HtRows8(Rows8::tail_add::<T>(tail.0, row.0))
-    }
-    #[inline(always)]
-    fn select_tail<T: TailFormat>(mask: HtMask8, x: HtRows8, y: HtRows8) -> HtRows8 {
+    fn select_tail<T: TailFormat>(mask: Mask8<S>, x: Self, y: Self) -> Self {
         Self::select(mask, x, y)
     }
 }
@@ -631,13 +518,13 @@ const POSITION: [usize; LANES] = [0, 2, 4, 6, 1, 3, 5, 7];
 
 /// `word0` of 8 rows (or tails) in one register, pixels in [`POSITION`] order.
 #[inline(always)]
-fn words0(r: Rows8) -> u32x8 {
+fn words0<const S: bool>(r: Lanes8<S>) -> u32x8 {
     (r.a & LO) | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.b) << 32)
 }
 
 /// `word1` of 8 rows (or tails) in one register, pixels in [`POSITION`] order.
 #[inline(always)]
-fn words1(r: Rows8) -> u32x8 {
+fn words1<const S: bool>(r: Lanes8<S>) -> u32x8 {
     cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.a) >> 32) | (r.b & HI)
 }
 
@@ -667,7 +554,7 @@ fn hybrid_resolve_regs<T: TailFormat, const K: usize>(
     tails: &[T; LANES],
 ) -> ([f32x8; 3], f32x8) {
     let head = crate::resolve::resolve_layers(head.iter().map(layer_bytes));
-    let tails = Rows8::load_tails(tails);
+    let tails = Rows8::from_rows(cast(*tails));
     let (w0, w1) = (words0(tails), words1(tails));
     let (sums, alpha, count) = match T::LAYOUT {
         Layout::Paper => {
