@@ -65,13 +65,16 @@ impl crate::sealed::Sealed for Unbiased {}
 pub trait Arithmetic:
     crate::sealed::Sealed + Copy + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
 {
-    /// `"paper"` or `"unbiased"`.
-    const NAME: &'static str;
     /// Which one (used by the lane code to pick its instructions).
     // The type is the crate's own: the trait is sealed, no other crate implements or reads it.
     #[allow(private_interfaces)]
     #[doc(hidden)]
     const KIND: Kind;
+    /// `"paper"` or `"unbiased"`.
+    const NAME: &'static str = match Self::KIND {
+        Kind::Paper => "paper",
+        Kind::Unbiased => "unbiased",
+    };
     /// The HT tail of this arithmetic.
     type Tail: TailFormat;
 
@@ -107,7 +110,6 @@ pub struct Paper;
 pub struct Unbiased;
 
 impl Arithmetic for Paper {
-    const NAME: &'static str = "paper";
     #[allow(private_interfaces)]
     const KIND: Kind = Kind::Paper;
     type Tail = PaperTail;
@@ -129,7 +131,6 @@ impl Arithmetic for Paper {
 }
 
 impl Arithmetic for Unbiased {
-    const NAME: &'static str = "unbiased";
     #[allow(private_interfaces)]
     const KIND: Kind = Kind::Unbiased;
     type Tail = Tail;

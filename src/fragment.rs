@@ -87,53 +87,6 @@ pub struct Fragment {
     depth: f32,
 }
 
-#[inline]
-fn check_alpha(alpha: f32) -> Result<(), FragmentError> {
-    if alpha.is_nan() {
-        Err(FragmentError::NanAlpha)
-    } else if !(0.0..=1.0).contains(&alpha) {
-        Err(FragmentError::AlphaOutOfRange)
-    } else {
-        Ok(())
-    }
-}
-
-#[inline]
-fn check_color(color: Vec3) -> Result<(), FragmentError> {
-    let c = color.to_array();
-    if c.iter().any(|v| v.is_nan()) {
-        Err(FragmentError::NanColor)
-    } else if c.iter().any(|v| v.is_infinite()) {
-        Err(FragmentError::InfiniteColor)
-    } else if c.iter().any(|&v| v < 0.0) {
-        Err(FragmentError::NegativeColor)
-    } else {
-        Ok(())
-    }
-}
-
-/// After the NaN checks: infinite color, then infinite depth (an infinite alpha is a range
-/// error, [`FragmentError::AlphaOutOfRange`]).
-#[inline]
-fn check_infinities(color: Vec3, depth: f32) -> Result<(), FragmentError> {
-    if color.to_array().iter().any(|v| v.is_infinite()) {
-        Err(FragmentError::InfiniteColor)
-    } else if depth.is_infinite() {
-        Err(FragmentError::InfiniteDepth)
-    } else {
-        Ok(())
-    }
-}
-
-#[inline]
-fn check_premultiplied(color: Vec3) -> Result<(), FragmentError> {
-    if color.to_array().iter().any(|&v| v > 1.0) {
-        Err(FragmentError::ColorAboveOne)
-    } else {
-        Ok(())
-    }
-}
-
 impl Fragment {
     /// A fragment from premultiplied color (`color * alpha` already applied), alpha and depth.
     ///
@@ -172,24 +125,34 @@ impl Fragment {
         Self::error(color.x, color.y, color.z, alpha, depth, straight)
     }
 
-    /// The error of an invalid fragment (`straight`: its color is straight), in the
-    /// documented order (or, where none is found, the fragment).
+    /// The error of an invalid fragment (`straight`: its color is straight): the first
+    /// failing check in the documented order (or, where none fails, the fragment).
     #[cold]
     #[inline(never)]
     // Channels as scalars: they travel in registers, so the hot path stores nothing for it.
     fn error(r: f32, g: f32, b: f32, alpha: f32, depth: f32, straight: bool) -> Result<Fragment, FragmentError> {
+        use FragmentError as E;
         let color = Vec3::new(r, g, b);
-        Self::check_nans(color, alpha, depth)?;
-        check_infinities(color, depth)?;
-        check_color(color)?;
-        check_alpha(alpha)?;
         let pre = if straight { color * alpha } else { color };
-        check_premultiplied(pre)?;
-        Ok(Fragment {
-            color: pre,
-            alpha,
-            depth,
-        })
+        let any = |f: fn(f32) -> bool| color.to_array().into_iter().any(f);
+        let checks = [
+            (depth.is_nan(), E::NanDepth),
+            (alpha.is_nan(), E::NanAlpha),
+            (any(f32::is_nan), E::NanColor),
+            (any(f32::is_infinite), E::InfiniteColor),
+            (depth.is_infinite(), E::InfiniteDepth),
+            (any(|v| v < 0.0), E::NegativeColor),
+            (!(0.0..=1.0).contains(&alpha), E::AlphaOutOfRange),
+            (pre.to_array().into_iter().any(|v| v > 1.0), E::ColorAboveOne),
+        ];
+        match checks.into_iter().find(|&(failed, _)| failed) {
+            Some((_, e)) => Err(e),
+            None => Ok(Fragment {
+                color: pre,
+                alpha,
+                depth,
+            }),
+        }
     }
 
     /// A fragment from premultiplied `[R, G, B, A]` (color already multiplied by alpha; no
@@ -213,25 +176,15 @@ impl Fragment {
         if transmittance.is_nan() {
             return Err(FragmentError::NanAlpha);
         }
-        check_alpha(transmittance)?;
+        if !(0.0..=1.0).contains(&transmittance) {
+            return Err(FragmentError::AlphaOutOfRange);
+        }
         Fragment::premultiplied(color, 1.0 - transmittance, depth)
     }
 
     /// Pure additive light (alpha 0): adds `light` to whatever lies behind it, occludes nothing.
     pub fn additive(light: Vec3, depth: f32) -> Result<Fragment, FragmentError> {
         Fragment::premultiplied(light, 0.0, depth)
-    }
-
-    fn check_nans(color: Vec3, alpha: f32, depth: f32) -> Result<(), FragmentError> {
-        if depth.is_nan() {
-            Err(FragmentError::NanDepth)
-        } else if alpha.is_nan() {
-            Err(FragmentError::NanAlpha)
-        } else if color.is_nan() {
-            Err(FragmentError::NanColor)
-        } else {
-            Ok(())
-        }
     }
 
     /// Premultiplied color.
