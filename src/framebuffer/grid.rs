@@ -38,12 +38,12 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
     const SPANS: bool;
     #[doc(hidden)]
     fn line_rows(d: Dims, rows: usize) -> Option<usize>;
+    /// Storage index of slot `j` of pixel `(x, y)` (checked before), `n` slots per pixel.
     #[doc(hidden)]
-    fn clear<P: Pixel>(rows: &mut [Row]);
+    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize;
+    /// Which slot of its pixel storage index `i` holds, `n` slots per pixel.
     #[doc(hidden)]
-    fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value>;
-    #[doc(hidden)]
-    fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value);
+    fn slot_of(i: usize, n: usize) -> usize;
     #[doc(hidden)]
     fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row);
     #[doc(hidden)]
@@ -89,25 +89,12 @@ impl Arrangement for PixelMajor {
         (d.width as usize).checked_mul(rows)
     }
 
-    fn clear<P: Pixel>(rows: &mut [Row]) {
-        for (i, r) in rows.iter_mut().enumerate() {
-            *r = P::empty_slot(i % P::ROWS);
-        }
+    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize {
+        d.index_unchecked(x, y) * n + j
     }
 
-    fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value> {
-        unit(rows, d.index_unchecked(x, y), P::ROWS)
-            .map(|px| P::from_slots(|j| px.get(j).copied().unwrap_or(Row::EMPTY)))
-    }
-
-    fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value) {
-        if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), P::ROWS) {
-            P::to_slots(value, |j, r| {
-                if let Some(slot) = px.get_mut(j) {
-                    *slot = r;
-                }
-            });
-        }
+    fn slot_of(i: usize, n: usize) -> usize {
+        i % n
     }
 
     #[inline(always)]
@@ -142,27 +129,13 @@ impl Arrangement for Spans {
         d.spans.checked_mul(LANES)?.checked_mul(rows)
     }
 
-    fn clear<P: Pixel>(rows: &mut [Row]) {
-        for (i, r) in rows.iter_mut().enumerate() {
-            *r = P::empty_slot(i / LANES % P::ROWS);
-        }
+    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize {
+        let (i, lane) = d.span_lane(x, y);
+        (i * n + j) * LANES + lane
     }
 
-    fn get<P: Pixel>(rows: &[Row], d: Dims, x: u32, y: u32) -> Option<P::Value> {
-        let (i, lane) = d.span_lane(x, y);
-        unit(rows, i, LANES * P::ROWS)
-            .map(|s| P::from_slots(|j| s.get(j * LANES + lane).copied().unwrap_or(Row::EMPTY)))
-    }
-
-    fn set<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, value: P::Value) {
-        let (i, lane) = d.span_lane(x, y);
-        if let Some(s) = unit_mut(rows, i, LANES * P::ROWS) {
-            P::to_slots(value, |j, r| {
-                if let Some(slot) = s.get_mut(j * LANES + lane) {
-                    *slot = r;
-                }
-            });
-        }
+    fn slot_of(i: usize, n: usize) -> usize {
+        i / LANES % n
     }
 
     #[inline(always)]
@@ -269,7 +242,7 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
     /// The contents of pixel `(x, y)`: `[Row; M]` for MLAB, `([Row; K], tail)` for HT.
     pub fn pixel(&self, x: u32, y: u32) -> Result<P::Value, FramebufferError> {
         self.dims.check(x, y)?;
-        L::get::<P>(self.rows, self.dims, x, y).ok_or(self.dims.out_of_bounds(x, y))
+        Ok(self.get(x, y))
     }
 
     /// Overwrite every pixel with those of `other` (same kind and size, any arrangement):
@@ -280,8 +253,12 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
         }
         for y in 0..self.dims.height {
             for x in 0..self.dims.width {
-                let v = other.pixel(x, y)?;
-                L::set::<P>(self.rows, self.dims, x, y, v);
+                let (d, rows) = (self.dims, &mut *self.rows);
+                P::to_slots(other.get(x, y), |j, r| {
+                    if let Some(slot) = rows.get_mut(L::slot(d, P::ROWS, x, y, j)) {
+                        *slot = r;
+                    }
+                });
             }
         }
         Ok(())
@@ -292,12 +269,23 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
         let d = self.dims;
         (0..d.height)
             .flat_map(|y| (0..d.width).map(move |x| (x, y)))
-            .filter(|&(x, y)| L::get::<P>(self.rows, d, x, y).is_some_and(|v| P::saturated(&v)))
+            .filter(|&(x, y)| P::saturated(&self.get(x, y)))
             .count()
     }
 }
 
 impl<P: Pixel, L: Arrangement> Grid<'_, P, L> {
+    /// The contents of pixel `(x, y)` (checked before).
+    fn get(&self, x: u32, y: u32) -> P::Value {
+        let d = self.dims;
+        P::from_slots(|j| {
+            self.rows
+                .get(L::slot(d, P::ROWS, x, y, j))
+                .copied()
+                .unwrap_or(Row::EMPTY)
+        })
+    }
+
     /// Span `span` of line `y` resolved, clear where it does not exist.
     fn lanes(&self, span: u32, y: u32) -> ResolvedLanes {
         self.resolve_span(span, y).unwrap_or(CLEAR_LANES)
@@ -343,7 +331,9 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     }
 
     fn clear(&mut self) {
-        L::clear::<P>(self.rows);
+        for (i, r) in self.rows.iter_mut().enumerate() {
+            *r = P::empty_slot(L::slot_of(i, P::ROWS));
+        }
     }
 
     #[inline(always)]
