@@ -37,7 +37,11 @@ pub fn state(rows: &[Row]) -> ([u64; 3], Vec<u64>) {
 /// The integer RGBA8 resolve of one pixel's rows, front to back.
 pub fn rgba8(rows: &[Row], bg: Background) -> [u8; 4] {
     let (acc, vis) = state(rows);
-    let v = *vis.last().unwrap();
+    pixel(acc, *vis.last().unwrap(), bg)
+}
+
+/// The pixel from the accumulators and the visibility.
+fn pixel(acc: [u64; 3], v: u64, bg: Background) -> [u8; 4] {
     match bg {
         Background::Opaque(c) => {
             let b = c.to_array().map(background_channel);
@@ -54,6 +58,70 @@ pub fn rgba8(rows: &[Row], bg: Background) -> [u8; 4] {
             ]
         }
     }
+}
+
+/// The HT tail's `(T, g)` in Q16 (`docs/layout.md`, "Integer resolve of HT"), written from the
+/// docs in `u64`: the tables as the formulas that give them, the Horner sums as loops over
+/// those, the divisions as `/`.
+pub fn ht_tail(alpha: u64, count: u64) -> (u64, u64) {
+    let rnd = |x: f64| (x + 0.5).floor() as u64;
+    let h_c: Vec<u64> = (0..8).map(|k| rnd(16_777_216.0 / (255.0 * (k as f64 + 1.0)))).collect();
+    let fact = |k: u64| (1..=k).product::<u64>() as f64;
+    let exp_c: Vec<u64> = (0..7).map(|k| rnd(65536.0 * (-0.5f64).exp() / fact(k))).collect();
+    let bits_c: Vec<u64> = (0..6).map(|i| rnd(65536.0 * (-(2f64.powi(i)) / 2.0).exp())).collect();
+    let psi_c: Vec<u64> = (0..6).map(|k| rnd(65536.0 / fact(k + 1))).collect();
+    let q16 = |x: u64, y: u64| (x * y + 32768) / 65536;
+    let horner = |c: &[u64], x: u64| c.iter().rev().skip(1).fold(c[c.len() - 1], |a, &ck| ck + q16(a, x));
+    let n = count.max(1);
+    let m = 257 * alpha / n;
+    let route_a = m <= 16384;
+    let h = horner(&h_c, m.min(16384));
+    let u = (alpha.min(4095) * h + 128) / 256;
+    let j = u / 32768;
+    let e_r = horner(&exp_c, 32768 - u % 32768);
+    let zero = if route_a { u >= 786_432 } else { n >= 64 };
+    let t = if zero {
+        0
+    } else if route_a {
+        // e^(-u) = e^(-r) times the factor of each set bit of j = floor(2 u).
+        (0..6)
+            .filter(|i| (j >> i) & 1 == 1)
+            .fold(e_r, |p, i| q16(p, bits_c[i as usize]))
+    } else {
+        // x^n by the bits of n, x = 1 - m.
+        let mut b = 65535 - m.min(65535);
+        let mut p = 65536;
+        for i in 0..6 {
+            if (n >> i) & 1 == 1 {
+                p = q16(p, b);
+            }
+            b = q16(b, b);
+        }
+        p
+    }
+    .min(65536);
+    let g = if route_a && u < 32768 {
+        let psi = horner(&psi_c, u);
+        let phi = ((t / 2) * psi + 16384) / 32768;
+        phi + ((((h - h_c[0]) * phi + 128) / 256) * 255 + 32768) / 65536
+    } else {
+        (65536 - t) * 255 / alpha.max(1)
+    };
+    (t, g.min(65536))
+}
+
+/// The integer RGBA8 resolve of one HT pixel: the MLAB integer resolve's state over the head
+/// rows, the tail's light and transmittance, then the MLAB pixel.
+pub fn ht_rgba8<T: mlab::TailFormat>(head: &[Row], tail: T, bg: Background) -> [u8; 4] {
+    let (mut acc, vis) = state(head);
+    let v = *vis.last().unwrap();
+    let (t, g) = ht_tail(u64::from(tail.alpha_sum()), u64::from(tail.count()));
+    for (a, s) in acc.iter_mut().zip(tail.color_sum()) {
+        let l = (u64::from(s) * g + 256) / 512;
+        *a = (*a + l / 32768 * v + q15(l % 32768, v)).min(32767);
+    }
+    let v = (t * v + 32768) / 65536;
+    pixel(acc, v, bg)
 }
 
 /// The exact composite of the rows in bytes (f64): `255 (C + bg V)` per channel over an
