@@ -443,12 +443,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     fn span_resolve_rgba8(span: &[Row], background: Background) -> [[u8; 4]; LANES] {
         match Self::parts(span) {
             Some((h, t)) => lanes::hybrid_resolve_parts_rgba8(h, t, background),
-            None => Self::clear_rgba8(background),
+            None => clear_rgba8(background),
         }
-    }
-
-    /// The integer resolve of an empty pixel (as MLAB's).
-    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
-        [crate::resolve::int::rgba8(&[], background); LANES]
     }
 }

@@ -265,11 +265,26 @@ pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background:
     }
 }
 
-/// The HT resolve of separate head layers and tails straight to RGBA8: the integer resolve
-/// (`docs/layout.md`, "Integer resolve of HT"), byte-identical to the scalar
-/// `resolve::int::ht_rgba8` of each pixel.
+/// The HT resolve of separate head layers and tails straight to RGBA8 (f32, then
+/// [`crate::to_rgba8`] per lane): what HT's `resolve_rgba8` writes (the integer resolve,
+/// [`hybrid_resolve_parts_rgba8_int`], measured slower: `docs/performance.md`).
 #[inline(always)]
 pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+    background: Background,
+) -> [[u8; 4]; LANES] {
+    x8::hybrid_resolve(head, tails).rgba8(background)
+}
+
+/// The integer RGBA8 resolve of HT (`docs/layout.md`, "Integer resolve of HT"),
+/// byte-identical to the scalar `resolve::int::ht_rgba8` of each pixel. Not the default.
+#[inline(always)]
+#[cfg_attr(
+    not(test),
+    allow(dead_code, reason = "measured slower than the f32 resolve: not the default")
+)]
+pub(crate) fn hybrid_resolve_parts_rgba8_int<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
     background: Background,

@@ -758,6 +758,12 @@ impl Resolved8 {
             transmittance: unpermute(self.t.to_array()),
         }
     }
+
+    /// RGBA8 in pixel order.
+    #[inline(always)]
+    pub(super) fn rgba8(self, background: Background) -> [[u8; 4]; LANES] {
+        unpermute(rgba8_lanes(self.color, self.t, background))
+    }
 }
 
 /// Eq. 5 over an MLAB span.
