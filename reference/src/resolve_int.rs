@@ -213,28 +213,6 @@ pub fn bound(rows: &[Row], bg: Background) -> [f64; 4] {
     out
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use mlab::glam::Vec3;
-
-    #[test]
-    fn documented_examples() {
-        // docs/layout.md: an empty pixel is the background, a byte background exactly.
-        for k in 0..=255u8 {
-            let b = f32::from(k) / 255.0;
-            assert_eq!(rgba8(&[], Background::Opaque(Vec3::splat(b))), [k, k, k, 255]);
-        }
-        assert_eq!(rgba8(&[Row::EMPTY; 3], Background::Transparent), [0, 0, 0, 0]);
-        // One opaque row: its bytes, whatever the background.
-        let r = Row::new([200, 7, 0], 0, 1.0);
-        assert_eq!(rgba8(&[r], Background::Opaque(Vec3::ONE)), [200, 7, 0, 255]);
-        assert_eq!(rgba8(&[r], Background::Transparent), [200, 7, 0, 255]);
-        assert_eq!(background_channel(f32::NAN), 0);
-        assert_eq!(background_channel(2.0), 32640);
-    }
-}
-
 /// The bound of `|T - 65536 T_exact|` of [`ht_tail`] in units of `2^-16` (`docs/layout.md`,
 /// "Integer resolve of HT": the sum of the step budgets).
 pub const HT_T_BOUND: f64 = 4.0;
@@ -334,4 +312,26 @@ pub fn ht_bound<T: mlab::TailFormat>(head: &[Row], tail: T, bg: Background) -> [
         None => 0.5 + (0.5 + 32640.0 / 32768.0 * (1.0 - v_head * t_tail + e_final)) / 128.0,
     };
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mlab::glam::Vec3;
+
+    #[test]
+    fn documented_examples() {
+        // docs/layout.md: an empty pixel is the background, a byte background exactly.
+        for k in 0..=255u8 {
+            let b = f32::from(k) / 255.0;
+            assert_eq!(rgba8(&[], Background::Opaque(Vec3::splat(b))), [k, k, k, 255]);
+        }
+        assert_eq!(rgba8(&[Row::EMPTY; 3], Background::Transparent), [0, 0, 0, 0]);
+        // One opaque row: its bytes, whatever the background.
+        let r = Row::new([200, 7, 0], 0, 1.0);
+        assert_eq!(rgba8(&[r], Background::Opaque(Vec3::ONE)), [200, 7, 0, 255]);
+        assert_eq!(rgba8(&[r], Background::Transparent), [200, 7, 0, 255]);
+        assert_eq!(background_channel(f32::NAN), 0);
+        assert_eq!(background_channel(2.0), 32640);
+    }
 }

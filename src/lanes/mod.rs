@@ -280,10 +280,7 @@ pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
 /// The integer RGBA8 resolve of HT (`docs/layout.md`, "Integer resolve of HT"),
 /// byte-identical to the scalar `resolve::int::ht_rgba8` of each pixel. Not the default.
 #[inline(always)]
-#[cfg_attr(
-    not(test),
-    allow(dead_code, reason = "measured slower than the f32 resolve: not the default")
-)]
+#[allow(dead_code, reason = "measured slower than the f32 resolve: not the default")]
 pub(crate) fn hybrid_resolve_parts_rgba8_int<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
