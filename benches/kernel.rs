@@ -322,6 +322,47 @@ fn resolve_lanes_f32<const M: usize>(out: &mut [[u8; 4]], spans: &[MlabSpan<M>],
     }
 }
 
+/// The integer HT RGBA8 resolve (what `resolve_rgba8` writes for HT), span storage, K = 3:
+/// count it inclusive.
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
+fn resolve_ht_int<A: Arithmetic>(out: &mut [[u8; 4]], fb: &mlab::HybridSpanFramebuffer<'_, 3, A>, bg: Background) {
+    fb.resolve_rgba8(out, bg).expect("size");
+}
+
+/// The f32 HT resolve in lanes, then `to_rgba8` in lanes (`ResolvedLanes::rgba8`): HT's
+/// RGBA8 before the integer resolve.
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
+fn resolve_ht_f32<A: Arithmetic>(out: &mut [[u8; 4]], spans: &[HybridSpan<3, A>], bg: Background) {
+    for (o, s) in out.chunks_exact_mut(LANES).zip(spans) {
+        o.copy_from_slice(&lanes::hybrid_resolve(s).rgba8(bg));
+    }
+}
+
+fn resolve_ht<A: Arithmetic>(
+    g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    stream: &[Step],
+    name: &str,
+) {
+    let mut hs = vec![HybridSpan::<3, A>::default(); SPANS];
+    hybrid_lanes(&mut hs, stream);
+    let mut storage: Vec<Row> = hs
+        .iter()
+        .flat_map(|s| {
+            let tails: [Row; LANES] = s.tails.map(|t| Row::from_bytes(t.to_bytes()));
+            s.head.iter().flatten().copied().chain(tails).collect::<Vec<_>>()
+        })
+        .collect();
+    let fb = mlab::HybridSpanFramebuffer::<3, A>::new(&mut storage, W as u32, H as u32).expect("size");
+    let bg = Background::Opaque(mlab::glam::Vec3::new(0.2, 0.3, 0.4));
+    let mut out = vec![[0u8; 4]; W * H];
+    g.bench_function(BenchmarkId::new(format!("ht_int{name}"), 3), |b| {
+        b.iter(|| resolve_ht_int::<A>(&mut out, black_box(&fb), bg))
+    });
+    g.bench_function(BenchmarkId::new(format!("ht_f32{name}"), 3), |b| {
+        b.iter(|| resolve_ht_f32::<A>(&mut out, black_box(&hs), bg))
+    });
+}
+
 fn resolve_m<const M: usize>(g: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>, stream: &[Step]) {
     let mut pixels = vec![[Row::EMPTY; M]; W * H];
     mlab_scalar::<Unbiased, M>(&mut pixels, stream);
@@ -371,6 +412,8 @@ fn resolve(c: &mut Criterion) {
             }
         })
     });
+    resolve_ht::<Unbiased>(&mut g, &stream, "");
+    resolve_ht::<Paper>(&mut g, &stream, "_paper");
     g.finish();
 }
 

@@ -10,6 +10,7 @@
 //! seed, 2 seeds: the full 2^32 pairs of rows, or 2^24 per channel, would take minutes);
 //! arbitrary rows at M = 1, 2, 3, 4, 8 for the bound. About 2 s in a debug build.
 
+use mlab::TailFormat;
 use mlab::glam::Vec3;
 use mlab::{Background, DynFramebuffer, Framebuffer, Layers, MlabFramebuffer, Row, SpanFramebuffer};
 use mlab_reference::{Rng, resolve_int};
@@ -164,4 +165,128 @@ fn arbitrary_rows_within_the_bound() {
     run::<3>(&mut rng, 21, 7);
     run::<4>(&mut rng, 130, 17);
     run::<8>(&mut rng, 45, 9);
+}
+
+/// HT pixels (K head rows and a tail each): the reference integer formula (equal to the
+/// kernel's scalar and lane definitions, `src/lanes/ht_int.rs` tests) against the exact
+/// composite within the derived bound (backgrounds in `[0, 1]`).
+fn check_ht<const K: usize, A: mlab::Arithmetic>(pixels: &[([Row; K], A::Tail)], w: u32) -> f64 {
+    let h = (pixels.len() as u32).div_ceil(w);
+    assert_eq!(pixels.len(), (w * h) as usize);
+    let n = pixels.len();
+    let _ = w;
+    let mut worst = 0.0f64;
+    for bg in BACKGROUNDS {
+        let want: Vec<[u8; 4]> = pixels.iter().map(|(hd, t)| resolve_int::ht_rgba8(hd, *t, bg)).collect();
+        let in_range = match bg {
+            Background::Opaque(c) => c.to_array().iter().all(|x| (0.0..=1.0).contains(x)),
+            Background::Transparent => true,
+        };
+        if in_range {
+            for ((hd, t), w) in pixels.iter().zip(&want) {
+                let exact = resolve_int::ht_exact(hd, *t, bg);
+                let bound = resolve_int::ht_bound(hd, *t, bg);
+                for ch in 0..4 {
+                    let err = (f64::from(w[ch]) - exact[ch]).abs();
+                    assert!(
+                        err <= bound[ch] + 1e-9,
+                        "K = {K} {bg:?} {hd:?} {t:?} channel {ch}: {} vs exact {} (bound {})",
+                        w[ch],
+                        exact[ch],
+                        bound[ch]
+                    );
+                    worst = worst.max(err - 0.5);
+                }
+            }
+        }
+    }
+    eprintln!("HT K = {K}: {n} pixels, largest error beyond 1/2 step {worst:.4} byte");
+    worst
+}
+
+/// Every tail of one fragment: each `(C, A)` byte pair (`S_c = C` in R, `255 - C` in G,
+/// `C ^ 0xa5` in B, `S_a = A`, count 1) behind no head (K = 1, an empty head row), both tails;
+/// and behind a half-transparent head row.
+#[test]
+fn ht_every_tail_of_one_fragment() {
+    fn run<A: mlab::Arithmetic>(front: Row) {
+        let pixels: Vec<([Row; 1], A::Tail)> = (0..65536u32)
+            .map(|i| {
+                let (c, a) = (i & 255, i >> 8);
+                ([front], A::Tail::from_sums([c, 255 - c, c ^ 0xa5], a, 1))
+            })
+            .collect();
+        check_ht::<1, A>(&pixels, 256);
+    }
+    run::<mlab::Unbiased>(Row::EMPTY);
+    run::<mlab::Paper>(Row::EMPTY);
+    run::<mlab::Unbiased>(Row::new([40, 90, 10], 128, 1.0));
+}
+
+/// Every count of each tail (0..=2047 for `Tail`, 0..=65535 in steps of 7 for `PaperTail`)
+/// with fixed sums: small, mid and saturated alpha, colors at and above the alpha.
+#[test]
+fn ht_every_count_fixed_sums() {
+    for &a in &[1u32, 37, 255, 700, 4000, 16383] {
+        let pixels: Vec<([Row; 0], mlab::Tail)> = (0..2048u32)
+            .map(|n| ([], mlab::Tail::from_sums([a.min(8191), (3 * a).min(8191), 8191], a, n)))
+            .collect();
+        check_ht::<0, mlab::Unbiased>(&pixels, 64);
+    }
+    for &a in &[1u32, 300, 2000, 65535] {
+        let pixels: Vec<([Row; 0], mlab::hybrid::PaperTail)> = (0..65536u32)
+            .step_by(7)
+            .take(9362)
+            .map(|n| ([], mlab::hybrid::PaperTail::from_sums([a.min(1023), 1023, 0], a, n)))
+            .collect();
+        check_ht::<0, mlab::Paper>(&pixels, 31 * 2);
+    }
+}
+
+/// Random fragment-like heads and tails accumulated from fragment-like rows (K = 3, both
+/// tails), and arbitrary head and tail bytes (which must resolve, equal to the reference).
+#[test]
+fn ht_random_and_arbitrary() {
+    fn frag_row(rng: &mut Rng) -> Row {
+        let x = rng.next_u64();
+        let t = (x >> 24) as u8;
+        let cov = 255 - u32::from(t);
+        let c = |s: u32| ((((x >> s) & 255) as u32 * cov) / 255) as u8;
+        Row::new([c(32), c(40), c(48)], t, 1.0)
+    }
+    fn run<A: mlab::Arithmetic>(rng: &mut Rng, arbitrary: bool) {
+        let pixels: Vec<([Row; 3], A::Tail)> = (0..40 * 25)
+            .map(|_| {
+                if arbitrary {
+                    let r = |rng: &mut Rng| Row::from_bytes(rng.next_u64().to_le_bytes());
+                    (
+                        [r(rng), r(rng), r(rng)],
+                        A::Tail::from_bytes(rng.next_u64().to_le_bytes()),
+                    )
+                } else {
+                    let head = [frag_row(rng), frag_row(rng), frag_row(rng)];
+                    let mut tail = A::Tail::EMPTY;
+                    for _ in 0..rng.next_u64() % 300 {
+                        tail.add(frag_row(rng));
+                    }
+                    (head, tail)
+                }
+            })
+            .collect();
+        if arbitrary {
+            // Arbitrary bytes: the formula resolves every pattern (no panic, no overflow).
+            for bg in BACKGROUNDS {
+                for (hd, t) in &pixels {
+                    let _ = resolve_int::ht_rgba8(hd, *t, bg);
+                }
+            }
+        } else {
+            check_ht::<3, A>(&pixels, 40);
+        }
+    }
+    let mut rng = Rng(0x22_4854);
+    run::<mlab::Unbiased>(&mut rng, false);
+    run::<mlab::Paper>(&mut rng, false);
+    run::<mlab::Unbiased>(&mut rng, true);
+    run::<mlab::Paper>(&mut rng, true);
 }

@@ -1,14 +1,15 @@
-//! The integer RGBA8 resolve (what `Framebuffer::resolve_rgba8` writes for MLAB) against the
-//! f32 resolve's RGBA8 (`resolve_into`, then `to_rgba8`) on the lab's main scenes: the share of
-//! pixels whose bytes differ and the largest difference, and each resolve's error against the
-//! exact composite of the stored rows (f64) and against the exact composite of the fragments
-//! (the A-buffer oracle). For docs/performance.md ("Integer resolve").
+//! The integer RGBA8 resolve (what `Framebuffer::resolve_rgba8` writes, MLAB and HT) against
+//! the f32 resolve's RGBA8 (`resolve_into`, then `to_rgba8`) on the lab's main scenes: the share
+//! of pixels whose bytes differ and the largest difference, and each resolve's error against the
+//! exact composite of what is stored (the rows, or the HT head and tail, in f64) and against the
+//! exact composite of the fragments (the A-buffer oracle). For docs/performance.md ("Integer
+//! resolve", "Integer HT resolve").
 //!
 //! `cargo run --release -p oit-lab --example resolve_int [WIDTH HEIGHT SEED]` (default
 //! 640 360 1).
 
 use mlab::glam::{Vec3, Vec4};
-use mlab::{Background, Framebuffer, MlabFramebuffer, Row, to_rgba8};
+use mlab::{Arithmetic, Background, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Row, Unbiased, to_rgba8};
 use mlab_reference::model::composite_rows_f64;
 use oit_lab::scenes::Scene;
 use oit_lab::stream::{PixelBins, Stream};
@@ -48,14 +49,16 @@ impl Stats {
     }
 }
 
-fn run<const M: usize>(stream: &Stream, bins: &PixelBins) {
+/// Both RGBA8 resolves of a filled framebuffer against the exact composites; `exact(i)` is the
+/// f64 composite (premultiplied color, visibility) of what pixel `i` stores.
+fn compare<F: Framebuffer>(
+    label: &str,
+    fb: &F,
+    stream: &Stream,
+    bins: &PixelBins,
+    exact: impl Fn(u32, u32) -> [f64; 4],
+) {
     let (w, h) = (stream.width, stream.height);
-    let mut storage = vec![Row::EMPTY; (w * h) as usize * M];
-    let mut fb = MlabFramebuffer::<M>::new(&mut storage, w, h).expect("size");
-    for f in &stream.frags {
-        let frag = f.to_kernel().expect("valid scene fragments");
-        fb.insert(f.pixel % w, f.pixel / w, &frag).expect("inside");
-    }
     let bg = stream.background;
     let background = Background::Opaque(Vec3::from(bg));
     let n = (w * h) as usize;
@@ -80,25 +83,55 @@ fn run<const M: usize>(stream: &Stream, bins: &PixelBins) {
         for ch in 0..3 {
             largest = largest.max(int[i][ch].abs_diff(f32s[i][ch]));
         }
-        let rows = fb.pixel(x, y).expect("inside");
-        let (c, v) = composite_rows_f64(&rows);
+        let stored = exact(x, y);
         let layers: Vec<mlab::Fragment> = frags
             .iter()
             .map(|&j| stream.frags[j as usize].to_kernel().expect("valid"))
             .collect();
         let (oc, _) = mlab_reference::oracle(&layers, bgd);
         for ch in 0..3 {
-            let rows_exact = 255.0 * (c[ch] + bgd[ch] * v);
-            si.add(int[i][ch], rows_exact, 255.0 * oc[ch]);
-            sf.add(f32s[i][ch], rows_exact, 255.0 * oc[ch]);
+            si.add(int[i][ch], stored[ch], 255.0 * oc[ch]);
+            sf.add(f32s[i][ch], stored[ch], 255.0 * oc[ch]);
         }
     }
     println!(
-        "- M = {M}: {differ} of {covered} covered pixels differ ({:.3} %), largest difference {largest}",
+        "- {label}: {differ} of {covered} covered pixels differ ({:.3} %), largest difference {largest}",
         100.0 * differ as f64 / covered.max(1) as f64
     );
     println!("  - integer: {}", si.line());
     println!("  - f32:     {}", sf.line());
+}
+
+fn run<const M: usize>(stream: &Stream, bins: &PixelBins) {
+    let (w, h) = (stream.width, stream.height);
+    let mut storage = vec![Row::EMPTY; (w * h) as usize * M];
+    let mut fb = MlabFramebuffer::<M>::new(&mut storage, w, h).expect("size");
+    for f in &stream.frags {
+        let frag = f.to_kernel().expect("valid scene fragments");
+        fb.insert(f.pixel % w, f.pixel / w, &frag).expect("inside");
+    }
+    let bgd = stream.background.map(f64::from);
+    let exact = |x, y| {
+        let (c, v) = composite_rows_f64(&fb.pixel(x, y).expect("inside"));
+        [0, 1, 2, 3].map(|ch| if ch < 3 { 255.0 * (c[ch] + bgd[ch] * v) } else { 255.0 })
+    };
+    compare(&format!("MLAB M = {M}"), &fb, stream, bins, exact);
+}
+
+fn run_ht<const K: usize, A: Arithmetic>(stream: &Stream, bins: &PixelBins) {
+    let (w, h) = (stream.width, stream.height);
+    let mut storage = vec![Row::EMPTY; HybridFramebuffer::<K, A>::rows_needed(w, h).expect("size")];
+    let mut fb = HybridFramebuffer::<K, A>::new_cleared(&mut storage, w, h).expect("size");
+    for f in &stream.frags {
+        let frag = f.to_kernel().expect("valid scene fragments");
+        fb.insert(f.pixel % w, f.pixel / w, &frag).expect("inside");
+    }
+    let bg = Background::Opaque(Vec3::from(stream.background));
+    let exact = |x, y| {
+        let (head, tail) = fb.pixel(x, y).expect("inside");
+        mlab_reference::resolve_int::ht_exact(&head, tail, bg)
+    };
+    compare(&format!("HT K = {K}, {}", A::NAME), &fb, stream, bins, exact);
 }
 
 fn main() {
@@ -113,6 +146,9 @@ fn main() {
         run::<1>(&stream, &bins);
         run::<4>(&stream, &bins);
         run::<8>(&stream, &bins);
+        run_ht::<3, Unbiased>(&stream, &bins);
+        run_ht::<3, Paper>(&stream, &bins);
+        run_ht::<7, Unbiased>(&stream, &bins);
         println!();
     }
 }

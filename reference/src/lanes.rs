@@ -139,8 +139,8 @@ pub fn check_hybrid_rows<const K: usize, A: Arithmetic>(
 
 /// An HT span against 8 scalar pixels: bytes ([`check_hybrid_rows`]); `lanes::hybrid_resolve`
 /// bit for bit against `Hybrid::resolve` ([`check_resolved_lanes`]);
-/// `Framebuffer::resolve_rgba8` of a `HybridSpanFramebuffer` over the span against
-/// `to_rgba8` for every background.
+/// `Framebuffer::resolve_rgba8` of a `HybridSpanFramebuffer` over the span against the
+/// reference integer resolve (`resolve_int::ht_rgba8`) for every background.
 pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
     span: &HybridSpan<K, A>,
     pixels: &[Hybrid<K, A>; LANES],
@@ -151,7 +151,7 @@ pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
         let mut rows: Vec<Row> = span.head.iter().flatten().copied().collect();
         rows.extend(span.tails.iter().map(|t| Row::from_bytes(t.to_bytes())));
         let got = mlab_rgba8(&mut HybridSpanFramebuffer::<K, A>::new(&mut rows, 8, 1), bg);
-        let w = want.map(|r| to_rgba8(r.pixel(bg)));
+        let w = pixels.map(|p| crate::resolve_int::ht_rgba8(p.head(), p.tail(), bg));
         ensure!(got == w, "K = {K} hybrid_resolve_rgba8 {bg:?}: {got:?} vs {w:?}");
     }
     check_resolved_lanes(&lanes::hybrid_resolve(span), &want)

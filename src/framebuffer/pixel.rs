@@ -426,4 +426,9 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         Self::view::<L, _>(unit, |h, t| lanes::hybrid_resolve_parts_rgba8(h, t, bg))
             .unwrap_or_else(|| Self::clear_rgba8(bg))
     }
+
+    /// The integer resolve of an empty pixel (as MLAB's: an empty tail adds nothing).
+    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
+        [crate::resolve::int::rgba8(&[], background); LANES]
+    }
 }

@@ -50,6 +50,7 @@
 //! assert_eq!(span[0][0], Row::new([102, 0, 0], 102, 1.0)); // 0.4 and 0.6 are exact bytes
 //! ```
 
+mod ht_int;
 mod quantize;
 // The lane helpers narrow lanes whose range their comments state (bytes of 16-bit slots).
 #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
@@ -264,15 +265,19 @@ pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background:
     }
 }
 
-/// The HT resolve of separate head layers and tails straight to RGBA8 (f32, then
-/// [`crate::to_rgba8`] per lane).
+/// The HT resolve of separate head layers and tails straight to RGBA8: the integer resolve
+/// (`docs/layout.md`, "Integer resolve of HT"), byte-identical to the scalar
+/// `resolve::int::ht_rgba8` of each pixel.
 #[inline(always)]
 pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
     background: Background,
 ) -> [[u8; 4]; LANES] {
-    x8::hybrid_resolve(head, tails).rgba8(background)
+    match crate::resolve::int::background(background) {
+        Some(bg) => ht_int::resolve::<T, K, true>(head, tails, bg),
+        None => ht_int::resolve::<T, K, false>(head, tails, [0; 3]),
+    }
 }
 
 /// [`hybrid_resolve`] on separate head layers and tails.

@@ -530,7 +530,7 @@ fn words1<const S: bool>(r: Lanes8<S>) -> u32x8 {
 
 /// Back to pixel order.
 #[inline(always)]
-fn unpermute<T: Copy>(x: [T; LANES]) -> [T; LANES] {
+pub(super) fn unpermute<T: Copy>(x: [T; LANES]) -> [T; LANES] {
     core::array::from_fn(|p| x[POSITION[p]])
 }
 
@@ -554,9 +554,22 @@ fn hybrid_resolve_regs<T: TailFormat, const K: usize>(
     tails: &[T; LANES],
 ) -> ([f32x8; 3], f32x8) {
     let head = crate::resolve::resolve_layers(head.iter().map(layer_bytes));
+    let (sums, alpha, count) = tail_fields(tails);
+    crate::resolve::resolve_lanes::<f32x8>(head, sums, alpha, count)
+}
+
+/// `word0` (the `[R, G, B, T]` bytes) of one layer of 8 rows, pixels in [`POSITION`] order.
+#[inline(always)]
+pub(super) fn layer_words(layer: &[Row; LANES]) -> u32x8 {
+    words0(Rows8::load(layer))
+}
+
+/// The fields of 8 tails (color sums, alpha sum, count), pixels in [`POSITION`] order.
+#[inline(always)]
+pub(super) fn tail_fields<T: TailFormat>(tails: &[T; LANES]) -> ([u32x8; 3], u32x8, u32x8) {
     let tails = Rows8::from_rows(cast(*tails));
     let (w0, w1) = (words0(tails), words1(tails));
-    let (sums, alpha, count) = match T::LAYOUT {
+    match T::LAYOUT {
         Layout::Paper => {
             let field = u32x8::splat(0x3ff);
             let sums = [w0 & field, (w0 >> 10) & field, (w0 >> 20) & field];
@@ -572,8 +585,7 @@ fn hybrid_resolve_regs<T: TailFormat, const K: usize>(
                 w1 >> 21,
             )
         }
-    };
-    crate::resolve::resolve_lanes::<f32x8>(head, sums, alpha, count)
+    }
 }
 
 /// `x` clamped to `[0, 1]` with NaN to 0, as [`crate::to_rgba8`] clamps: `x > 1 ? 1 : x`,
@@ -632,12 +644,6 @@ impl Resolved8 {
             color: self.color.map(|c| unpermute(c.to_array())),
             transmittance: unpermute(self.t.to_array()),
         }
-    }
-
-    /// RGBA8 in pixel order.
-    #[inline(always)]
-    pub(super) fn rgba8(self, background: Background) -> [[u8; 4]; LANES] {
-        unpermute(rgba8_lanes(self.color, self.t, background))
     }
 }
 
