@@ -225,13 +225,12 @@ pub(crate) fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
 /// `Rgba8UnormSrgb`), or encode it yourself from [`resolve_into`](Self::resolve_into) for
 /// display.
 ///
-/// Which resolve: for MLAB, [`resolve_rgba8`](Self::resolve_rgba8) and
-/// [`resolve_span_rgba8`](Self::resolve_span_rgba8) are the integer resolve (`docs/layout.md`,
-/// "Integer resolve": the same bytes in scalar code, every SIMD backend and a shader; for
-/// valid fragments and `M <= 30` within one step of [`to_rgba8`](crate::to_rgba8) of the f32
-/// resolve, which it replaces there by measurement, `docs/performance.md`); for HT they are `to_rgba8` of the
-/// f32 resolve. Every other resolve is the f32 one ([`Resolved`]; exact f32 programs in
-/// `docs/layout.md`).
+/// Which resolve: [`resolve_rgba8`](Self::resolve_rgba8) and
+/// [`resolve_span_rgba8`](Self::resolve_span_rgba8) are the integer resolve, MLAB's and HT's
+/// (`docs/layout.md`, "Integer resolve" and "Integer resolve of HT": the same bytes in scalar
+/// code, every SIMD backend and a shader; for valid fragments within one step of
+/// [`to_rgba8`](crate::to_rgba8) of the f32 resolve, `docs/performance.md`). Every other
+/// resolve is the f32 one ([`Resolved`]; exact f32 programs in `docs/layout.md`).
 pub trait Framebuffer {
     /// The arithmetic of the merge, of quantization and of the HT tail.
     type Arith: Arithmetic;
@@ -310,9 +309,8 @@ pub trait Framebuffer {
         insert_fragments(self, x, y, fragments, mask, true)
     }
 
-    /// Resolve the 8 pixels of a span straight to RGBA8 (MLAB: the integer resolve; HT:
-    /// [`to_rgba8`](crate::to_rgba8) of [`resolve_span`](Self::resolve_span)); lanes past the
-    /// edge, and every lane of a span outside, are an empty pixel's.
+    /// Resolve the 8 pixels of a span straight to RGBA8 (the integer resolve, see the trait
+    /// docs); lanes past the edge, and every lane of a span outside, are an empty pixel's.
     #[inline]
     fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
         self.resolve_span(span, y).unwrap_or(CLEAR_LANES).rgba8(background)
@@ -325,9 +323,8 @@ pub trait Framebuffer {
         write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
     }
 
-    /// Resolve every pixel into RGBA8 (linear unorm8, not sRGB), row-major: MLAB the integer
-    /// resolve, HT [`to_rgba8`](crate::to_rgba8) of the f32 resolve (see the trait docs);
-    /// the same bytes as [`resolve_span_rgba8`](Self::resolve_span_rgba8) span by span.
+    /// Resolve every pixel into RGBA8 (linear unorm8, not sRGB), row-major: the integer
+    /// resolve (see the trait docs); the same bytes as [`resolve_span_rgba8`](Self::resolve_span_rgba8) span by span.
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
         let span = |s, y| self.resolve_span_rgba8(s, y, background);
         write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
