@@ -280,6 +280,11 @@ pub(crate) mod int {
         (b * BG_SCALE + 0.5) as u32
     }
 
+    /// A background as the integer resolve takes it: its three channels
+    /// ([`background_channel`]), or `None` for [`Background::Transparent`]; computed once
+    /// per resolve call, outside the loops over lines and spans.
+    pub(crate) type IntBackground = Option<[u32; 3]>;
+
     /// The background's three channels, or `None` for [`Background::Transparent`].
     #[inline]
     pub(crate) fn background(bg: Background) -> Option<[u32; 3]> {
@@ -539,12 +544,12 @@ mod int_tests {
         for bg in BACKGROUNDS {
             let want = pixels.map(|p| int::rgba8(&p, bg));
             assert_eq!(
-                lanes::mlab_resolve_rgba8(&span, bg),
+                lanes::mlab_resolve_rgba8(&span, int::background(bg)),
                 want,
                 "M = {M} spans {bg:?}: {pixels:?}"
             );
             assert_eq!(
-                lanes::mlab_resolve_pixel_major_rgba8(&pixels, bg),
+                lanes::mlab_resolve_pixel_major_rgba8(&pixels, int::background(bg)),
                 want,
                 "M = {M} pixel-major {bg:?}: {pixels:?}"
             );
@@ -567,10 +572,7 @@ mod int_tests {
         // Each `T = 255` row lowers `v` by one unit while `v > 16384` (docs/layout.md): 300
         // of them leave alpha 2 (255 * 300 / 32767 = 2.3).
         assert_eq!(want, [255, 255, 255, 2]);
-        assert_eq!(
-            lanes::mlab_resolve_rgba8(&bright, Background::Transparent),
-            [want; LANES]
-        );
+        assert_eq!(lanes::mlab_resolve_rgba8(&bright, None), [want; LANES]);
     }
 
     /// Every single row (each channel sees every (color, T) pair) in lanes and scalar.
@@ -584,7 +586,7 @@ mod int_tests {
                 });
                 for bg in BACKGROUNDS {
                     let want = rows.map(|r| int::rgba8(&[r], bg));
-                    assert_eq!(lanes::mlab_resolve_rgba8(&[rows], bg), want);
+                    assert_eq!(lanes::mlab_resolve_rgba8(&[rows], int::background(bg)), want);
                 }
             }
         }

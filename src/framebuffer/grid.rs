@@ -8,9 +8,9 @@ use core::fmt::Debug;
 use core::marker::PhantomData;
 
 use super::pixel::Pixel;
-use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, each_span, write_lines};
+use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
 use crate::lanes::{LANES, LANES_U32, ResolvedLanes};
-use crate::resolve::{Background, Resolved, to_rgba16f};
+use crate::resolve::{Background, Resolved, int, to_rgba16f};
 use crate::row::Row;
 use glam::Vec4;
 use half::f16;
@@ -301,11 +301,10 @@ impl<P: Pixel, L: Arrangement> Grid<'_, P, L> {
         edge: impl Fn(u32, u32) -> [T; LANES],
     ) -> Result<(), FramebufferError> {
         if !(L::SPANS || P::PIXEL_MAJOR_LINE_LOOP) {
-            return write_lines(self.dims, out, each_span(&edge), &edge);
+            return write_spans(self.dims, out, edge);
         }
-        let n = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
-        let line = |y: u32| self.rows.get(y as usize * n..(y as usize + 1) * n).unwrap_or(&[]);
-        write_lines(self.dims, out, |y, spans| whole(line(y), spans), edge)
+        let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
+        write_lines(self.dims, out, self.rows, line_rows, whole, edge)
     }
 }
 
@@ -364,7 +363,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     #[inline]
     fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
         match L::span_unit(self.rows, self.dims, P::ROWS, span, y) {
-            Some(u) => P::resolve_unit_rgba8::<L>(u, background),
+            Some(u) => P::resolve_unit_rgba8::<L>(u, int::background(background)),
             None => P::clear_rgba8(background),
         }
     }
@@ -376,7 +375,8 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     }
 
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], bg: Background) -> Result<(), FramebufferError> {
-        let whole = |line: &[Row], o: &mut [[[u8; 4]; LANES]]| P::resolve_line_rgba8::<L>(line, o, bg);
+        let ibg = int::background(bg);
+        let whole = |line: &[Row], o: &mut [[[u8; 4]; LANES]]| P::resolve_line_rgba8::<L>(line, o, ibg);
         self.write(out, whole, |s, y| self.resolve_span_rgba8(s, y, bg))
     }
 

@@ -157,11 +157,39 @@ impl Dims {
     }
 }
 
-/// Write a whole-frame resolve into a row-major output of `width * height` pixels, line by
-/// line: the whole 8-pixel spans of line `y` by `whole(y, spans)`, the partial last span by
-/// `edge(span, y)`, its lanes past the right edge dropped. Whole spans are written as arrays,
-/// a fixed-size store each (a copy of `o.len()` elements compiled to a call to `memmove` per
-/// span: 16-22 % of an RGBA8 resolve at M = 1).
+/// Write the 8 lanes of each span (`span(span_index_in_line, y)`) into a row-major output
+/// of `width * height` pixels, dropping lanes past the right edge. Whole spans are written as
+/// arrays, a fixed-size store each (a copy of `o.len()` elements, the same for every chunk,
+/// compiled to a call to `memmove` per span: 16-22 % of an RGBA8 resolve at M = 1).
+#[expect(
+    clippy::cast_possible_truncation,
+    reason = "span and line indices are below the u32 width and height"
+)]
+pub(crate) fn write_spans<T: Copy>(
+    d: Dims,
+    out: &mut [T],
+    span: impl Fn(u32, u32) -> [T; LANES],
+) -> Result<(), FramebufferError> {
+    d.check_output(out.len())?;
+    if d.width == 0 {
+        return Ok(());
+    }
+    for (y, line) in out.chunks_exact_mut(d.width as usize).enumerate() {
+        let (whole, rest) = line.as_chunks_mut::<LANES>();
+        for (sx, o) in whole.iter_mut().enumerate() {
+            *o = span(sx as u32, y as u32);
+        }
+        if !rest.is_empty() {
+            write_edge(rest, &span, whole.len() as u32, y as u32);
+        }
+    }
+    Ok(())
+}
+
+/// [`write_spans`] with the whole spans of each line written by `whole` from the line's
+/// `line_rows` rows of `rows` (a framebuffer's own loop, without index maths or a bounds
+/// check per span). Two writers, not one taking a closure per line: written as one, the
+/// resolves ran 2 to 7 % more instructions (callgrind, `docs/performance.md`).
 #[expect(
     clippy::cast_possible_truncation,
     reason = "span and line indices are below the u32 width and height"
@@ -169,33 +197,35 @@ impl Dims {
 pub(crate) fn write_lines<T: Copy>(
     d: Dims,
     out: &mut [T],
-    whole: impl Fn(u32, &mut [[T; LANES]]),
+    rows: &[Row],
+    line_rows: usize,
+    whole: impl Fn(&[Row], &mut [[T; LANES]]),
     edge: impl Fn(u32, u32) -> [T; LANES],
 ) -> Result<(), FramebufferError> {
     d.check_output(out.len())?;
     if d.width == 0 {
         return Ok(());
     }
-    for (y, line) in out.chunks_exact_mut(d.width as usize).enumerate() {
+    let lines = out
+        .chunks_exact_mut(d.width as usize)
+        .zip(rows.chunks_exact(line_rows.max(1)));
+    for (y, (line, src)) in lines.enumerate() {
         let (spans, rest) = line.as_chunks_mut::<LANES>();
-        whole(y as u32, spans);
+        whole(src, spans);
         if !rest.is_empty() {
-            let px = edge(spans.len() as u32, y as u32);
-            rest.copy_from_slice(&px[..rest.len()]);
+            write_edge(rest, &edge, spans.len() as u32, y as u32);
         }
     }
     Ok(())
 }
 
-/// The `whole` of [`write_lines`] span by span: `span(span, y)` for each whole span of line
-/// `y` (where no framebuffer has a faster loop over its storage).
-#[expect(clippy::cast_possible_truncation, reason = "span indices are below the u32 width")]
-pub(crate) fn each_span<T>(span: impl Fn(u32, u32) -> [T; LANES]) -> impl Fn(u32, &mut [[T; LANES]]) {
-    move |y, spans| {
-        for (sx, o) in spans.iter_mut().enumerate() {
-            *o = span(sx as u32, y);
-        }
-    }
+/// The partial last span of a line (`rest`: its 1 to 7 pixels inside), by `edge(span, y)`:
+/// a call of its own, once per line where the width is not a multiple of 8, so that the
+/// loops over whole spans hold only their code.
+#[inline(never)]
+fn write_edge<T: Copy>(rest: &mut [T], edge: &impl Fn(u32, u32) -> [T; LANES], span: u32, y: u32) {
+    let px = edge(span, y);
+    rest.copy_from_slice(px.get(..rest.len()).unwrap_or(&px));
 }
 
 /// Resolved lanes of nothing (lanes past the edge, or spans that cannot exist).
@@ -320,14 +350,14 @@ pub trait Framebuffer {
     /// background, or premultiplied ([`Resolved::pixel`]). Linear.
     fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
         let span = |s, y| self.resolve_span(s, y).unwrap_or(CLEAR_LANES).pixels(background);
-        write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
+        write_spans(Dims::new(self.width(), self.height()), out, span)
     }
 
     /// Resolve every pixel into RGBA8 (linear unorm8, not sRGB), row-major: the integer
     /// resolve (see the trait docs); the same bytes as [`resolve_span_rgba8`](Self::resolve_span_rgba8) span by span.
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
         let span = |s, y| self.resolve_span_rgba8(s, y, background);
-        write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
+        write_spans(Dims::new(self.width(), self.height()), out, span)
     }
 
     /// Resolve every pixel into RGBA16F ([`to_rgba16f`], linear), row-major.
@@ -338,7 +368,7 @@ pub trait Framebuffer {
                 .pixels(background)
                 .map(to_rgba16f)
         };
-        write_lines(Dims::new(self.width(), self.height()), out, each_span(span), span)
+        write_spans(Dims::new(self.width(), self.height()), out, span)
     }
 
     /// Split into bands of `lines` lines (the last one may be shorter), each a framebuffer

@@ -60,6 +60,7 @@ mod x16;
 mod x8;
 
 use crate::arith::{Arithmetic, Unbiased};
+use crate::resolve::int::IntBackground;
 use crate::resolve::{Background, Resolved};
 use crate::row::Row;
 use crate::tail::TailFormat;
@@ -189,9 +190,9 @@ pub(crate) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES
 #[inline(always)]
 pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     pixels: &[[Row; M]; LANES],
-    background: Background,
+    background: IntBackground,
 ) -> [[u8; 4]; LANES] {
-    match crate::resolve::int::background(background) {
+    match background {
         Some(bg) => x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(pixels, bg),
         None => x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(pixels, [0; 3]),
     }
@@ -203,10 +204,10 @@ pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
 pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
     pixels: &[[[Row; M]; LANES]],
     out: &mut [[[u8; 4]; LANES]],
-    background: Background,
+    background: IntBackground,
 ) {
     let pairs = out.iter_mut().zip(pixels);
-    match crate::resolve::int::background(background) {
+    match background {
         Some(bg) => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(p, bg)),
         None => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(p, [0; 3])),
     }
@@ -217,10 +218,10 @@ pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
 pub(crate) fn mlab_resolve_line_rgba8<const M: usize>(
     spans: &[MlabSpan<M>],
     out: &mut [[[u8; 4]; LANES]],
-    background: Background,
+    background: IntBackground,
 ) {
     let pairs = out.iter_mut().zip(spans);
-    match crate::resolve::int::background(background) {
+    match background {
         Some(bg) => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, true>(s, bg)),
         None => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, false>(s, [0; 3])),
     }
@@ -258,8 +259,8 @@ impl ResolvedLanes {
 /// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) writes for MLAB), in
 /// 16-bit lanes: byte-identical to the scalar `resolve::int::rgba8` of each pixel.
 #[inline(always)]
-pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: Background) -> [[u8; 4]; LANES] {
-    match crate::resolve::int::background(background) {
+pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: IntBackground) -> [[u8; 4]; LANES] {
+    match background {
         Some(bg) => x8::mlab_resolve_rgba8_int::<M, true>(span, bg),
         None => x8::mlab_resolve_rgba8_int::<M, false>(span, [0; 3]),
     }
@@ -272,9 +273,9 @@ pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background:
 pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
-    background: Background,
+    background: IntBackground,
 ) -> [[u8; 4]; LANES] {
-    match crate::resolve::int::background(background) {
+    match background {
         Some(bg) => ht_int::resolve::<T, K, true>(head, tails, bg),
         None => ht_int::resolve::<T, K, false>(head, tails, [0; 3]),
     }
