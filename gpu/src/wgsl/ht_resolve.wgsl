@@ -41,7 +41,7 @@ fn ht_tail_resolve(alpha: u32, count: u32) -> vec2<u32> {
     let m = (257u * alpha) / n; // 257 S_a <= 16,842,495 < 2^24: exact
     let series = m <= 16384u; // route A: m <= 1/4, T = e^-u
     let mm = min(m, 16384u);
-    // h(m) = -ln(1 - m) / m in units of 1/65793 (H[7] .. H[0]); h <= 75,700: h * mm < 2^31.
+    // h(m) = -ln(1 - m) / m in units of 1/65793 (H[7] .. H[0]); h <= 75,710: h * mm < 2^31.
     var h = 8224u;
     h = 9399u + mlab_q16(h, mm);
     h = 10966u + mlab_q16(h, mm);
@@ -80,7 +80,8 @@ fn ht_tail_resolve(alpha: u32, count: u32) -> vec2<u32> {
     b = mlab_q16(b, b);
     p = select(p, mlab_q16(p, select(b, 0u, series)), (bits & 32u) != 0u);
     let t = select(min(p, 65536u), 0u, zero);
-    // psi(u) = (e^u - 1) / u (PSI[5] .. PSI[0]) on min(u, 32767); psi <= 85,025: < 2^32.
+    // psi(u) = (e^u - 1) / u (PSI[5] .. PSI[0]) on min(u, 32767); psi <= 85,028 (the maximum over
+    // every input, as h <= 75,710 and e_r <= 65,537 are): psi * 32767 < 2^32.
     let uu = min(u, 32767u);
     var psi = 91u;
     psi = 546u + mlab_q16(psi, uu);
@@ -88,7 +89,7 @@ fn ht_tail_resolve(alpha: u32, count: u32) -> vec2<u32> {
     psi = 10923u + mlab_q16(psi, uu);
     psi = 32768u + mlab_q16(psi, uu);
     psi = 65536u + mlab_q16(psi, uu);
-    let phi = ((t >> 1u) * psi + 16384u) >> 15u; // (1 - e^-u) / u; 32768 * 85,025 < 2^32
+    let phi = ((t >> 1u) * psi + 16384u) >> 15u; // (1 - e^-u) / u; 32768 * 85,028 < 2^32
     // g = h(m) phi(u) (route A, u < 1/2; (h - 65793) phi < 2^30), else (1 - T) / s (< 2^24).
     let g_s = phi + (((((h - 65793u) * phi + 128u) >> 8u) * 255u + 32768u) >> 16u);
     let g_d = ((65536u - t) * 255u) / max(alpha, 1u);
