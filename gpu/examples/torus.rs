@@ -1,8 +1,7 @@
 //! Fragments in, PNG out, on the GPU: the rasterizer example's transparent torus
-//! (`examples/common/raster.rs` of the kernel) composited by [`mlab_gpu::Compositor`] and, for
-//! MLAB, resolved to RGBA8 on the GPU by the kernel's integer resolve (HT: by the CPU kernel, whose
-//! HT RGBA8 is f32), and checked against the CPU kernel on the same fragments: the rows and the
-//! RGBA8 image are compared byte for byte.
+//! (`examples/common/raster.rs` of the kernel) composited by [`mlab_gpu::Compositor`], resolved
+//! to RGBA8 on the GPU by the kernel's integer resolve (MLAB's, or HT's), and checked against the
+//! CPU kernel on the same fragments: the rows and the RGBA8 image are compared byte for byte.
 //!
 //! ```sh
 //! cargo run --release -p mlab-gpu --example torus                   # MLAB, 4 rows, Unbiased
@@ -51,15 +50,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let gpu = Gpu::new()?;
     let info = gpu.adapter_info();
     let compositor = Compositor::new(&gpu, layers, arith, Layout::Spans)?;
-    let words = compositor.composite(W, H, &fragments)?;
-    let cpu_words = cpu::composite(layers, arith, Layout::Spans, W, H, &fragments)?;
-
     let background = Background::Opaque(mlab::glam::Vec3::new(0.9, 0.9, 0.85));
-    // MLAB: the integer RGBA8 resolve on the GPU; HT: the kernel's (f32) resolve of the GPU's rows.
-    let image = match layers {
-        Layers::Mlab(_) => compositor.composite_rgba8(W, H, &fragments, background)?.1,
-        Layers::Hybrid(_) => resolve(layers, arith, &words, background)?,
-    };
+    // The rows and the integer RGBA8 resolve, both on the GPU.
+    let (words, image) = compositor.composite_rgba8(W, H, &fragments, background)?;
+    let cpu_words = cpu::composite(layers, arith, Layout::Spans, W, H, &fragments)?;
     let cpu_image = resolve(layers, arith, &cpu_words, background)?;
     println!(
         "{layers:?} {arith:?} on {} ({}): {} fragments; rows {} the CPU's, RGBA8 {}",
@@ -89,7 +83,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     Ok(())
 }
 
-/// The kernel's RGBA8 resolve of span-layout storage words.
+/// The kernel's RGBA8 resolve of span-layout storage words (the CPU's image).
 fn resolve(layers: Layers, arith: Arith, words: &[u32], bg: Background) -> Result<Vec<[u8; 4]>, mlab::Error> {
     let mut rows: Vec<Row> = words.chunks_exact(2).map(|w| Row::from_words([w[0], w[1]])).collect();
     let mut out = vec![[0u8; 4]; (W * H) as usize];

@@ -111,7 +111,7 @@ pub struct Compositor {
     device: wgpu::Device,
     queue: wgpu::Queue,
     pipeline: wgpu::ComputePipeline,
-    /// The integer RGBA8 resolve (MLAB only).
+    /// The integer RGBA8 resolve (every method and size has one).
     resolve: Option<wgpu::ComputePipeline>,
     layers: Layers,
     layout: Layout,
@@ -192,7 +192,7 @@ impl Compositor {
                         cache: None,
                     })
                 };
-                let resolve = matches!(layers, Layers::Mlab(_)).then(|| entry("resolve"));
+                let resolve = Some(entry("resolve"));
                 (entry("composite"), resolve)
             },
             GpuError::Shader,
@@ -242,11 +242,9 @@ impl Compositor {
     }
 
     /// [`composite`](Self::composite), then the kernel's integer RGBA8 resolve on the GPU
-    /// (`docs/layout.md`, "Integer resolve", what `Framebuffer::resolve_rgba8` writes for
-    /// MLAB) over `background`: the storage words and the image, `width * height` pixels,
-    /// row-major. MLAB only: HT's RGBA8 is the kernel's f32 resolve, which a shader cannot
-    /// promise to reproduce (`GpuError::NoIntegerResolve`; resolve the returned words with the
-    /// CPU kernel instead).
+    /// (`docs/layout.md`, "Integer resolve" for MLAB, "Integer resolve of HT" for HT: what
+    /// `Framebuffer::resolve_rgba8` writes) over `background`: the storage words and the
+    /// image, `width * height` pixels, row-major; the bytes of [`crate::cpu::resolve_rgba8`].
     pub fn composite_rgba8(
         &self,
         width: u32,

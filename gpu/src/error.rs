@@ -53,8 +53,9 @@ pub enum GpuError {
         /// Why.
         error: FragmentError,
     },
-    /// An RGBA8 resolve on the GPU was asked of a method without an integer resolve (HT: its
-    /// RGBA8 is the kernel's f32 resolve).
+    /// An RGBA8 resolve on the GPU was asked of a method without an integer resolve. Every
+    /// method and size has one since HT's RGBA8 became the integer resolve of HT: no function
+    /// of this version returns it (kept so that code matching on it keeps compiling).
     NoIntegerResolve(Layers),
     /// The shader or pipeline was refused (wgpu's validation message).
     Shader(String),

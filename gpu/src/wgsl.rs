@@ -16,7 +16,7 @@
 //! |---|---|---|
 //! | [`KERNEL`] | quantization (both arithmetics), both merges, both tail adds, the depth test | nothing |
 //! | [`mlab()`] | [`KERNEL`], a header for `M` and the arithmetic, `mlab_insert` (Listing 1) | |
-//! | [`hybrid()`] | [`KERNEL`], a header for `K` and the arithmetic, `ht_insert` (Listing 2) | |
+//! | [`hybrid()`] | [`KERNEL`], a header for `K` and the arithmetic, `ht_insert` (Listing 2), `ht_resolve_rgba8` | |
 //! | [`compositor()`] | [`mlab()`] or [`hybrid()`] followed by the compositor's entry point and bindings | [`crate::Compositor`] |
 //!
 //! A shader includes [`mlab()`] (or [`hybrid()`]) and calls, per fragment:
@@ -46,11 +46,22 @@ pub const MLAB_INSERT: &str = include_str!("wgsl/mlab.wgsl");
 /// Listing 2 (`ht_insert`); needs `HT_K`, `ht_tail_add` and [`KERNEL`] ([`hybrid()`] has them all).
 pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
 
+/// The integer RGBA8 resolve of HT (`docs/layout.md`, "Integer resolve of HT"): the tail
+/// decoders `ht_tail_fields_paper` and `ht_tail_fields_wide` (both return the struct
+/// `ht_fields`: three color sums, alpha sum, count), the rounded Q16 product `mlab_q16`, the
+/// tail's `(T, g)` in Q16 (`ht_tail_resolve(alpha, count) -> vec2<u32>`, which uses nothing
+/// but `mlab_q16`), and `ht_resolve_rgba8(&head, tail, background)` (the bytes of the kernel's
+/// `resolve_rgba8` pixel as `R | G << 8 | B << 16 | A << 24`), which needs `HT_K`,
+/// `ht_tail_fields` and [`KERNEL`] ([`hybrid()`] has them all). The background is the
+/// `vec4<u32>` of [`crate::background_q15`], computed on the CPU.
+pub const HT_RESOLVE: &str = include_str!("wgsl/ht_resolve.wgsl");
+
 /// The compositor's bindings and helpers (see [`compositor()`]).
 const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");
 const COMPOSITE_MLAB: &str = include_str!("wgsl/composite_mlab.wgsl");
 const COMPOSITE_HT: &str = include_str!("wgsl/composite_ht.wgsl");
 const COMPOSITE_RESOLVE: &str = include_str!("wgsl/composite_resolve.wgsl");
+const COMPOSITE_RESOLVE_HT: &str = include_str!("wgsl/composite_resolve_ht.wgsl");
 
 fn check_size(layers: Layers) -> Result<(), GpuError> {
     let (Layers::Mlab(n) | Layers::Hybrid(n)) = layers;
@@ -77,8 +88,9 @@ pub fn mlab(m: usize, arith: Arith) -> Result<String, GpuError> {
 
 /// Hybrid Transparency with `k` head rows in the arithmetic `arith` ([`Arith::Paper`]: the
 /// paper's tail, [`Arith::Unbiased`]: the 64-bit [`mlab::Tail`] as two words): [`KERNEL`],
-/// then `const HT_K`, `ht_tail_add` and `mlab_quantize`, then [`HT_INSERT`]. `k` is one of
-/// [`Layers::SIZES`].
+/// then `const HT_K`, `ht_tail_add`, `ht_tail_fields` (the tail's decoder) and
+/// `mlab_quantize`, then [`HT_INSERT`] (`ht_insert`) and [`HT_RESOLVE`] (`ht_resolve_rgba8`,
+/// the kernel's integer RGBA8 resolve of HT). `k` is one of [`Layers::SIZES`].
 pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
     check_size(Layers::Hybrid(k))?;
     let a = arith.name();
@@ -89,7 +101,8 @@ pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
     Ok(format!(
         "{KERNEL}\n// mlab_gpu::wgsl::hybrid({k}, {a})\nconst HT_K: u32 = {k}u;\n\
          fn ht_tail_add(tail: vec2<u32>, row: vec2<u32>) -> vec2<u32> {{\n    return mlab_tail_add_{tail}(tail, row);\n}}\n\
-         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z);\n}}\n\n{HT_INSERT}"
+         fn ht_tail_fields(tail: vec2<u32>) -> ht_fields {{\n    return ht_tail_fields_{tail}(tail);\n}}\n\
+         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z);\n}}\n\n{HT_INSERT}\n{HT_RESOLVE}"
     ))
 }
 
@@ -99,6 +112,6 @@ pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
 pub fn compositor(layers: Layers, arith: Arith) -> Result<String, GpuError> {
     Ok(match layers {
         Layers::Mlab(m) => format!("{}\n{COMPOSITE}{COMPOSITE_MLAB}{COMPOSITE_RESOLVE}", mlab(m, arith)?),
-        Layers::Hybrid(k) => format!("{}\n{COMPOSITE}{COMPOSITE_HT}", hybrid(k, arith)?),
+        Layers::Hybrid(k) => format!("{}\n{COMPOSITE}{COMPOSITE_HT}{COMPOSITE_RESOLVE_HT}", hybrid(k, arith)?),
     })
 }

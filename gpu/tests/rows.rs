@@ -326,6 +326,11 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
             assert_eq!(c.source(), wgsl::compositor(layers, arith).expect("text"));
             assert!(c.source().starts_with(&library), "{layers:?} {arith:?}");
             assert!(library.starts_with(wgsl::KERNEL));
+            // The resolve the compositor runs is the exported one (HT: wgsl::HT_RESOLVE).
+            match layers {
+                Layers::Mlab(_) => assert!(library.ends_with(wgsl::MLAB_INSERT)),
+                Layers::Hybrid(_) => assert!(library.ends_with(&format!("{}\n{}", wgsl::HT_INSERT, wgsl::HT_RESOLVE))),
+            }
         }
     }
     // The library alone (no entry point) is valid WGSL a renderer can include.
@@ -419,16 +424,19 @@ fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
         }
     }
     println!("rgba8: {total} fragments, identical images");
-    // Bands give the same image; HT has no integer resolve.
+    // Bands give the same image (MLAB here, HT below: HT's RGBA8 is tests/ht_rgba8.rs).
     let frags = random_stream(&mut rng, 30, 40, 20_000);
     let bg = Background::Opaque(Vec3::new(0.2, 0.4, 0.6));
     let mut c = Compositor::new(&gpu, Layers::Mlab(4), Arith::Unbiased, Layout::Spans).expect("compositor");
     let whole = c.composite_rgba8(30, 40, &frags, bg).expect("one band");
     c.set_max_binding_bytes(16384);
     assert_eq!(c.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
-    let ht = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, Layout::Spans).expect("compositor");
+    let mut ht = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, Layout::Spans).expect("compositor");
+    let whole = ht.composite_rgba8(30, 40, &frags, bg).expect("one band");
     assert_eq!(
-        ht.composite_rgba8(2, 2, &[], bg),
-        Err(GpuError::NoIntegerResolve(Layers::Hybrid(3)))
+        whole.1,
+        cpu::resolve_rgba8(Layers::Hybrid(3), Arith::Unbiased, 30, 40, &frags, bg).expect("cpu")
     );
+    ht.set_max_binding_bytes(16384);
+    assert_eq!(ht.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
 }
