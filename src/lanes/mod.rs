@@ -235,6 +235,7 @@ pub fn hybrid_resolve<const K: usize, A: Arithmetic>(span: &HybridSpan<K, A>) ->
 
 impl ResolvedLanes {
     /// Lane `lane` (0..8) as a scalar [`Resolved`]; `None` past the last lane.
+    #[inline]
     pub fn get(&self, lane: usize) -> Option<Resolved> {
         let t = *self.transmittance.get(lane)?;
         let c = glam::Vec3::new(self.color[0][lane], self.color[1][lane], self.color[2][lane]);
@@ -245,6 +246,7 @@ impl ResolvedLanes {
     }
 
     /// The 8 pixels for `background` ([`Resolved::pixel`] per lane).
+    #[inline]
     pub fn pixels(&self, background: Background) -> [Vec4; LANES] {
         core::array::from_fn(|i| self.get(i).unwrap_or(Resolved::CLEAR).pixel(background))
     }
