@@ -18,6 +18,7 @@
 //! | [`mlab()`] | [`KERNEL`], a header for `M` and the arithmetic, `mlab_insert` (Listing 1) | |
 //! | [`hybrid()`] | [`KERNEL`], a header for `K` and the arithmetic, `ht_insert` (Listing 2) | |
 //! | [`compositor()`] | [`mlab()`] or [`hybrid()`] followed by the compositor's entry point and bindings | [`crate::Compositor`] |
+//! | [`SORT`] | the compositor's stable sort by pixel (a module of its own) | [`crate::Compositor`] |
 //!
 //! A shader includes [`mlab()`] (or [`hybrid()`]) and calls, per fragment:
 //!
@@ -45,6 +46,12 @@ pub const MLAB_INSERT: &str = include_str!("wgsl/mlab.wgsl");
 
 /// Listing 2 (`ht_insert`); needs `HT_K`, `ht_tail_add` and [`KERNEL`] ([`hybrid()`] has them all).
 pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
+
+/// The compositor's sort by pixel ([`crate::Sort::Gpu`]), a module of its own: a bitonic sort
+/// of `(stored pixel, submission index)` pairs (unique keys: the stable order), entry points
+/// `sort_init`, `sort_step` (one compare-exchange per invocation) and `sort_offsets_of` (a
+/// binary search per pixel); binding layout at the top of the text and in `docs/gpu.md`.
+pub const SORT: &str = include_str!("wgsl/sort.wgsl");
 
 /// The compositor's bindings and helpers (see [`compositor()`]).
 const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");
