@@ -151,7 +151,8 @@ struct Params {
     first: u32,
     width: u32,
     line: u32,
-    pad: [u32; 2],
+    sorted: u32,
+    pad: u32,
     background: [u32; 4],
 }
 
@@ -209,14 +210,18 @@ struct Band<'a> {
     line: u32,
 }
 
-/// A band's fragments on the GPU, sorted: `keys[offsets[p] .. offsets[p + 1]]` are pixel `p`'s
-/// `(pixel, index into fragments)` pairs in submission order.
+/// A band's fragments on the GPU, sorted: with keys ([`Sort::Gpu`]),
+/// `keys[offsets[p] .. offsets[p + 1]]` are pixel `p`'s `(pixel, index into fragments)` pairs
+/// in submission order; without ([`Sort::Cpu`]), the fragments were uploaded in that order and
+/// `fragments[offsets[p] .. offsets[p + 1]]` are pixel `p`'s.
 struct Sorted {
     fragments: wgpu::Buffer,
-    keys: wgpu::Buffer,
+    keys: Option<wgpu::Buffer>,
     offsets: wgpu::Buffer,
     /// The most fragments of one pixel.
     most: u32,
+    /// [`Sort::Cpu`]: the indices of the band's fragments in pixel order.
+    order: Vec<u32>,
 }
 
 /// What [`Compositor::run`] returns besides the order of the fragments.
@@ -463,8 +468,14 @@ impl Compositor {
                     image.extend(i);
                 }
                 Out::Order => {
-                    let keys = self.download(&sorted.keys, 8 * band.fragments.len() as u64)?;
-                    let local = keys.chunks_exact(2).map(|k| k[1]);
+                    let local = match &sorted.keys {
+                        Some(keys) => {
+                            let keys = self.download(keys, 8 * band.fragments.len() as u64)?;
+                            keys.chunks_exact(2).map(|k| k[1]).collect()
+                        }
+                        None => sorted.order,
+                    };
+                    let local = local.into_iter();
                     if bands.len() == 1 {
                         order.extend(local);
                     } else {
@@ -510,19 +521,24 @@ impl Compositor {
                 offsets[p + 1] += offsets[p];
             }
             let mut cursor = offsets.clone();
-            let mut keys = vec![[u32::MAX; 2]; n.max(1) as usize];
+            let mut order = vec![0u32; n as usize];
             for (index, f) in (0u32..).zip(band.fragments) {
-                let p = local(f);
-                keys[cursor[p as usize] as usize] = [p, index];
-                cursor[p as usize] += 1;
+                let p = local(f) as usize;
+                order[cursor[p] as usize] = index;
+                cursor[p] += 1;
             }
+            drop(cursor);
+            // The fragments themselves in pixel order: the composite reads them in sequence.
+            let in_order: Vec<GpuFragment> = order.iter().map(|&i| band.fragments[i as usize]).collect();
+            let words: &[GpuFragment] = if n == 0 { &placeholder } else { &in_order };
             return scoped(
                 device,
                 || Sorted {
                     fragments: init("fragments", bytemuck::cast_slice(words), storage),
-                    keys: init("keys", bytemuck::cast_slice(&keys), storage),
+                    keys: None,
                     offsets: init("offsets", bytemuck::cast_slice(&offsets), storage),
                     most,
+                    order,
                 },
                 GpuError::Device,
             );
@@ -625,9 +641,10 @@ impl Compositor {
                     most_back,
                     Sorted {
                         fragments,
-                        keys,
+                        keys: Some(keys),
                         offsets,
                         most: 0,
+                        order: Vec::new(),
                     },
                 )
             },
@@ -685,7 +702,8 @@ impl Compositor {
             first: pass * CHUNK,
             width,
             line,
-            pad: [0; 2],
+            sorted: u32::from(sorted.keys.is_none()),
+            pad: 0,
             background: background.unwrap_or([0; 4]),
         };
         // RGBA8 pixels of the band: its lines times the width (at least one word: no empty
@@ -700,6 +718,8 @@ impl Compositor {
                     usage,
                 })
             };
+            // Sort::Cpu: binding 5 is not read, but a binding may not be empty.
+            let no_keys = init("no keys", &[0; 8], wgpu::BufferUsages::STORAGE);
             let rows = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("rows"),
                 size: out_bytes,
@@ -720,7 +740,7 @@ impl Compositor {
                     (1, &sorted.offsets),
                     (2, &sorted.fragments),
                     (3, &rows),
-                    (5, &sorted.keys),
+                    (5, sorted.keys.as_ref().unwrap_or(&no_keys)),
                 ];
                 let entries: Vec<wgpu::BindGroupEntry> = entries
                     .into_iter()

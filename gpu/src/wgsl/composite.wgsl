@@ -3,10 +3,10 @@
 // the CPU) and writes its slots. Bindings (group 0):
 //   0 uniform          CompositeParams
 //   1 storage, read    offsets: array<u32>, pixels + 1 entries; pixel p's fragments are
-//                      order[offsets[p] .. offsets[p + 1]]
-//   2 storage, read    fragments: array<u32>, 6 words per fragment in submission order (the
-//                      layout of mlab_gpu::GpuFragment: pixel, bits of premultiplied R, G, B,
-//                      alpha, depth (f32))
+//                      positions offsets[p] .. offsets[p + 1] in pixel order
+//   2 storage, read    fragments: array<u32>, 6 words per fragment (the layout of
+//                      mlab_gpu::GpuFragment: pixel, bits of premultiplied R, G, B, alpha,
+//                      depth (f32)), in submission order (or in pixel order: `sorted`)
 //   3 storage, rw      rows: array<vec2<u32>>, the framebuffer's storage (Row::words)
 //   4 storage, rw      image: array<u32>, RGBA8 pixels (entry point `resolve`, MLAB only)
 //   5 storage, read    order: array<vec2<u32>>, the fragments sorted by pixel, stably: (stored
@@ -24,8 +24,10 @@ struct CompositeParams {
     // Image width, and stored pixels per line (the width, or 8 * ceil(width / 8) for spans).
     width: u32,
     line: u32,
-    pad0: u32,
-    pad1: u32,
+    // 1: the fragments are already in pixel order (mlab_gpu::Sort::Cpu), binding 5 is not read;
+    // 0: fragment i in pixel order is fragments[order[i].y] (mlab_gpu::Sort::Gpu).
+    sorted: u32,
+    pad: u32,
     // The background for `resolve`: three channels as mlab_gpu::background_q15 gives them, and
     // w = 1 (opaque) or 0 (Background::Transparent).
     background: vec4<u32>,
@@ -54,7 +56,10 @@ fn composite_slot(p: u32, j: u32, slots: u32) -> u32 {
 
 // The row of the i-th fragment in pixel order.
 fn composite_row(i: u32) -> vec2<u32> {
-    let k = 6u * composite_order[i].y;
+    var k = 6u * i;
+    if (composite_params.sorted == 0u) {
+        k = 6u * composite_order[i].y;
+    }
     let c = vec3<u32>(composite_fragments[k + 1u], composite_fragments[k + 2u], composite_fragments[k + 3u]);
     return mlab_quantize(c, composite_fragments[k + 4u], composite_fragments[k + 5u]);
 }
