@@ -221,7 +221,7 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
     for layout in [Layout::PixelMajor, Layout::Spans] {
         let mut c = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, layout).expect("compositor");
         let whole = c.composite(w, h, &frags).expect("one band");
-        // About 10 KB of fragments per line (17 per pixel, 20 bytes each) and 1 KB of rows:
+        // About 12 KB of fragments per line (17 per pixel, 24 bytes each) and 1 KB of rows:
         // 16 KiB bindings split the frame into bands of one line.
         c.set_max_binding_bytes(16384);
         assert_eq!(c.max_binding_bytes(), 16384);

@@ -1,9 +1,9 @@
 // The compositor's sort by pixel (mlab_gpu::Compositor, Sort::Gpu): a bitonic sort of
 // (stored pixel, submission index) pairs. The keys are unique (the index), so the sorted order is
 // the one order in which pixels ascend and, within a pixel, submission order is kept: a stable
-// sort, which MLAB's order-dependent insert needs. No invocation loops more than 33 times in all
+// sort, which MLAB's order-dependent insert needs. No invocation loops more than 66 times in all
 // (lavapipe ends an invocation's loops after 65,535 iterations): one compare-exchange per
-// invocation per dispatch, a binary search of at most 33 steps per pixel for the offsets.
+// invocation per dispatch, two binary searches of at most 33 steps each per pixel for the offsets.
 // Bindings (group 0; each entry point uses those it names):
 //   0 uniform          SortParams
 //   1 storage, read    fragments: array<u32>, 6 words per fragment in submission order (the
