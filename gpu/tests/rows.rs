@@ -344,7 +344,7 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
 fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
     let Some(gpu) = gpu("long_pixels") else { return };
     // Pixel 0: 100 000 fragments (lavapipe ends an invocation's loops after 65,535 iterations:
-    // three dispatches of 32 768); the others a few, so later dispatches leave them untouched.
+    // four dispatches of at most 32 768); the others a few, so later dispatches leave them untouched.
     let mut rng = Rng(5);
     let mut frags: Vec<GpuFragment> = (0..100_000).map(|_| rng.fragment(0)).collect();
     frags.extend((0..500).map(|_| rng.fragment_in(6)));
