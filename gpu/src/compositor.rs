@@ -87,8 +87,6 @@ impl Gpu {
     }
 }
 
-/// Bytes per fragment on the GPU: the bits of R, G, B, alpha, depth.
-const FRAGMENT_BYTES: u64 = 20;
 /// Fragments per pixel per dispatch (`COMPOSITE_CHUNK` in `composite.wgsl`: lavapipe ends an
 /// invocation's loops after 65,535 iterations in all).
 const CHUNK: u32 = 32768;
@@ -105,7 +103,27 @@ fn binding_limit(limits: &wgpu::Limits) -> u64 {
         .min(limits.max_buffer_size)
 }
 
-/// The compute pipeline of one method, size and arithmetic (the text of [`wgsl::compositor`]).
+/// Where the compositor sorts the fragments by pixel (submission order kept within a pixel, the
+/// order MLAB's order-dependent insert needs). Both give the same order, hence the same bytes.
+/// A new [`Compositor`] sorts on the GPU, except on a software adapter
+/// (`wgpu::DeviceType::Cpu`, such as lavapipe), where it sorts on the CPU: there the GPU sort
+/// runs on the same cores and measured 17-19x slower (`docs/gpu.md`, "Throughput").
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Sort {
+    /// On the GPU: a bitonic sort of `(pixel, submission index)` pairs, unique keys, so the
+    /// order is the stable one ([`wgsl::SORT`]); offsets by a binary search per pixel. The
+    /// CPU only validates, counts fragments per line (for the bands) and uploads the
+    /// fragments as given.
+    Gpu,
+    /// On the CPU: a stable counting sort by pixel; the GPU receives the fragments in that order
+    /// and the offsets (host memory: 28 bytes per fragment).
+    /// Faster on a software driver such as lavapipe, which runs the GPU's work on the same CPU
+    /// cores (`docs/gpu.md`, "Throughput").
+    Cpu,
+}
+
+/// The compute pipelines of one method, size and arithmetic (the text of [`wgsl::compositor`])
+/// and of the sort ([`wgsl::SORT`]).
 #[derive(Debug)]
 pub struct Compositor {
     device: wgpu::Device,
@@ -113,11 +131,17 @@ pub struct Compositor {
     pipeline: wgpu::ComputePipeline,
     /// The integer RGBA8 resolve (every method and size has one).
     resolve: Option<wgpu::ComputePipeline>,
+    /// `sort_init`, `sort_step`, `sort_offsets_of` of `sort.wgsl`.
+    sort_pipelines: [wgpu::ComputePipeline; 3],
+    sort: Sort,
+    /// Compare the index after the pixel (false only in the test of an unstable sort).
+    stable: bool,
     layers: Layers,
     layout: Layout,
     source: String,
     max_binding: u64,
     max_groups: u32,
+    uniform_align: u64,
 }
 
 /// The uniform of `composite.wgsl`.
@@ -130,8 +154,26 @@ struct Params {
     first: u32,
     width: u32,
     line: u32,
-    pad: [u32; 2],
+    sorted: u32,
+    pad: u32,
     background: [u32; 4],
+}
+
+/// The uniform of `sort.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct SortParams {
+    count: u32,
+    size: u32,
+    pitch: u32,
+    k: u32,
+    j: u32,
+    width: u32,
+    line: u32,
+    first: u32,
+    pixels: u32,
+    stable: u32,
+    pad: [u32; 2],
 }
 
 /// The background channels as the kernel's integer resolve quantizes them
@@ -160,40 +202,83 @@ pub fn background_q15(background: Background) -> [u32; 4] {
     }
 }
 
-/// One band's dispatch input.
+/// One band of whole lines: its fragments in submission order and where it lies.
 struct Band<'a> {
-    offsets: &'a [u32],
-    fragments: &'a [u32],
+    fragments: &'a [GpuFragment],
+    /// The band's first stored pixel.
+    first: u32,
+    /// Its stored pixels.
     pixels: u32,
     width: u32,
     line: u32,
-    background: Option<[u32; 4]>,
+}
+
+/// A band's fragments on the GPU, sorted: with keys ([`Sort::Gpu`]),
+/// `keys[offsets[p] .. offsets[p + 1]]` are pixel `p`'s `(pixel, index into fragments)` pairs
+/// in submission order; without ([`Sort::Cpu`]), the fragments were uploaded in that order and
+/// `fragments[offsets[p] .. offsets[p + 1]]` are pixel `p`'s.
+struct Sorted {
+    fragments: wgpu::Buffer,
+    keys: Option<wgpu::Buffer>,
+    offsets: wgpu::Buffer,
+    /// The most fragments of one pixel.
+    most: u32,
+    /// [`Sort::Cpu`]: the indices of the band's fragments in pixel order.
+    order: Vec<u32>,
+}
+
+/// What [`Compositor::run`] returns besides the order of the fragments.
+#[derive(Clone, Copy)]
+enum Out {
+    /// The rows, and the RGBA8 image over the background when there is one.
+    Rows(Option<[u32; 4]>),
+    /// The order only.
+    Order,
+}
+
+/// What [`Compositor::run`] returns: the storage words and the RGBA8 image, or the order.
+#[derive(Default)]
+struct Output {
+    words: Vec<u32>,
+    image: Vec<u32>,
+    order: Vec<u32>,
+}
+
+/// Padded key count for `n` fragments: a power of two, at least 1.
+fn key_count(n: u64) -> u64 {
+    n.next_power_of_two().max(1)
 }
 
 impl Compositor {
-    /// Compiles [`wgsl::compositor`]`(layers, arith)` on `gpu`.
+    /// Compiles [`wgsl::compositor`]`(layers, arith)` and [`wgsl::SORT`] on `gpu`; the sort is
+    /// [`Sort::Gpu`].
     pub fn new(gpu: &Gpu, layers: Layers, arith: Arith, layout: Layout) -> Result<Compositor, GpuError> {
         let source = wgsl::compositor(layers, arith)?;
         let device = &gpu.device;
-        let (pipeline, resolve) = scoped(
+        let (pipeline, resolve, sort_pipelines) = scoped(
             device,
             || {
-                let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some("mlab-gpu composite"),
-                    source: wgpu::ShaderSource::Wgsl(source.as_str().into()),
-                });
-                let entry = |name| {
+                let module = |label, text: &str| {
+                    device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some(label),
+                        source: wgpu::ShaderSource::Wgsl(text.into()),
+                    })
+                };
+                let composite = module("mlab-gpu composite", &source);
+                let sort = module("mlab-gpu sort", wgsl::SORT);
+                let entry = |module: &wgpu::ShaderModule, name| {
                     device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                         label: Some(name),
                         layout: None,
-                        module: &module,
+                        module,
                         entry_point: Some(name),
                         compilation_options: Default::default(),
                         cache: None,
                     })
                 };
-                let resolve = Some(entry("resolve"));
-                (entry("composite"), resolve)
+                let resolve = Some(entry(&composite, "resolve"));
+                let sorts = ["sort_init", "sort_step", "sort_offsets_of"].map(|name| entry(&sort, name));
+                (entry(&composite, "composite"), resolve, sorts)
             },
             GpuError::Shader,
         )?;
@@ -203,22 +288,49 @@ impl Compositor {
             queue: gpu.queue.clone(),
             pipeline,
             resolve,
+            sort_pipelines,
+            sort: if gpu.info.device_type == wgpu::DeviceType::Cpu {
+                Sort::Cpu
+            } else {
+                Sort::Gpu
+            },
+            stable: true,
             layers,
             layout,
             source,
             max_binding: binding_limit(&limits),
             max_groups: limits.max_compute_workgroups_per_dimension,
+            uniform_align: u64::from(limits.min_uniform_buffer_offset_alignment).max(64),
         })
     }
 
     /// The WGSL this compositor compiled (equal to [`wgsl::compositor`] for its method, size
-    /// and arithmetic).
+    /// and arithmetic; the sort's is [`wgsl::SORT`]).
     pub fn source(&self) -> &str {
         &self.source
     }
 
+    /// Where the fragments are sorted by pixel.
+    pub fn sort(&self) -> Sort {
+        self.sort
+    }
+
+    /// Sorts on the GPU ([`Sort::Gpu`]) or the CPU ([`Sort::Cpu`]): the same bytes. The
+    /// default depends on the adapter ([`Sort`]).
+    pub fn set_sort(&mut self, sort: Sort) {
+        self.sort = sort;
+    }
+
+    /// Test only: with `false`, [`Sort::Gpu`] compares pixels alone (an unstable sort: the
+    /// order within a pixel is the bitonic network's, not the submission order), so a test can
+    /// show that its comparison detects an unstable sort. Never use it otherwise.
+    #[doc(hidden)]
+    pub fn set_stable_sort_for_tests(&mut self, stable: bool) {
+        self.stable = stable;
+    }
+
     /// The most bytes one storage binding holds: 128 MiB (or less where the device allows
-    /// less). Frames whose rows or fragments need more are composited in bands of lines.
+    /// less). Frames whose buffers would need more are composited in bands of lines.
     pub fn max_binding_bytes(&self) -> u64 {
         self.max_binding
     }
@@ -234,11 +346,11 @@ impl Compositor {
     /// [`Layout`]: the bytes [`crate::cpu::composite`] gives for the same input.
     ///
     /// Every fragment is validated first (pixel inside the frame, [`mlab::Fragment`]'s
-    /// checks); nothing is sent to the GPU unless all are valid. The CPU sorts the fragments by
-    /// pixel (a stable counting sort: submission order kept within a pixel); the GPU runs one
-    /// invocation per stored pixel. Memory: see `docs/gpu.md`.
+    /// checks); nothing is sent to the GPU unless all are valid. The fragments are sorted by
+    /// pixel, submission order kept within a pixel (on the GPU by default, see [`Sort`]); the
+    /// GPU then runs one invocation per stored pixel. Memory: see `docs/gpu.md`.
     pub fn composite(&self, width: u32, height: u32, fragments: &[GpuFragment]) -> Result<Vec<u32>, GpuError> {
-        self.run(width, height, fragments, None).map(|(words, _)| words)
+        self.run(width, height, fragments, Out::Rows(None)).map(|o| o.words)
     }
 
     /// [`composite`](Self::composite), then the kernel's integer RGBA8 resolve on the GPU
@@ -255,17 +367,30 @@ impl Compositor {
         if self.resolve.is_none() {
             return Err(GpuError::NoIntegerResolve(self.layers));
         }
-        let (words, image) = self.run(width, height, fragments, Some(background_q15(background)))?;
+        let Output { words, image, .. } =
+            self.run(width, height, fragments, Out::Rows(Some(background_q15(background))))?;
         Ok((words, image.into_iter().map(u32::to_le_bytes).collect()))
     }
 
-    fn run(
-        &self,
-        width: u32,
-        height: u32,
-        fragments: &[GpuFragment],
-        background: Option<[u32; 4]>,
-    ) -> Result<(Vec<u32>, Vec<u32>), GpuError> {
+    /// The order in which [`composite`](Self::composite) inserts `fragments`: their indices
+    /// sorted by pixel, submission order kept within a pixel, as [`Self::sort`] computes it
+    /// (read back from the GPU for [`Sort::Gpu`]); validated and banded as `composite`. For
+    /// tests of the sort and for timing it alone.
+    pub fn order(&self, width: u32, height: u32, fragments: &[GpuFragment]) -> Result<Vec<u32>, GpuError> {
+        self.run(width, height, fragments, Out::Order).map(|o| o.order)
+    }
+
+    /// Bytes of the largest binding of a band of `pixels` stored pixels and `n` fragments: its
+    /// rows, offsets, fragments (24 bytes each) or sort keys (8 bytes per padded key).
+    fn band_bytes(&self, pixels: u64, n: u64) -> u64 {
+        let rows = pixels * slots(self.layers) as u64 * 8;
+        rows.max(4 * (pixels + 1))
+            .max(n * size_of::<GpuFragment>() as u64)
+            .max(8 * key_count(n))
+    }
+
+    /// Validates, bands, sorts, and then composites or returns the order.
+    fn run(&self, width: u32, height: u32, fragments: &[GpuFragment], out: Out) -> Result<Output, GpuError> {
         let too_large = GpuError::FrameTooLarge { width, height };
         let pixels = width.checked_mul(height).ok_or(too_large.clone())?;
         // Stored pixels per line: spans pad each line to a multiple of 8.
@@ -283,111 +408,314 @@ impl Compositor {
         if stored == 0 {
             // Nothing stored; still every fragment must be valid (none can be: no pixel).
             return match fragments.first() {
-                Some(f) => validate(0, f, 0).map(|_| (Vec::new(), Vec::new())),
-                None => Ok((Vec::new(), Vec::new())),
+                Some(f) => validate(0, f, 0).map(|_| Default::default()),
+                None => Ok(Default::default()),
             };
         }
-        // Stable counting sort by stored pixel, after validation.
-        let mut offsets = vec![0u32; stored as usize + 1];
-        let mut keys = Vec::with_capacity(fragments.len());
+        // Validation, and the fragments of each line (for the bands).
+        let mut lines = vec![0u32; height as usize];
         for (index, f) in fragments.iter().enumerate() {
             validate(index, f, pixels)?;
-            let key = (f.pixel / width) * pitch + f.pixel % width;
-            keys.push(key);
-            offsets[key as usize + 1] += 1;
+            lines[(f.pixel / width) as usize] += 1;
         }
-        for i in 0..stored as usize {
-            offsets[i + 1] += offsets[i];
-        }
-        let mut cursor = offsets.clone();
-        let mut sorted = vec![0u32; fragments.len() * 5];
-        for (f, &key) in fragments.iter().zip(&keys) {
-            let at = cursor[key as usize] as usize;
-            cursor[key as usize] += 1;
-            let [r, g, b, a] = f.rgba.map(f32::to_bits);
-            sorted[5 * at..5 * at + 5].copy_from_slice(&[r, g, b, a, f.depth.to_bits()]);
-        }
-        // Bands of whole lines, each within the binding limit.
-        let slots = slots(self.layers) as u64;
-        let line_bytes = u64::from(pitch) * slots * 8;
-        let mut words = Vec::with_capacity((u64::from(stored) * slots * 2) as usize);
-        let mut image = Vec::new();
+        // Bands of whole lines, each binding within the limit.
+        let mut bands = Vec::new();
         let mut y0 = 0u32;
         while y0 < height {
-            let mut y1 = y0;
+            let (mut y1, mut n) = (y0, 0u64);
             while y1 < height {
-                let rows = (u64::from(y1 - y0) + 1) * line_bytes;
-                let frags = u64::from(offsets[((y1 + 1) * pitch) as usize] - offsets[(y0 * pitch) as usize]);
-                if rows > self.max_binding || frags * FRAGMENT_BYTES > self.max_binding {
+                let more = n + u64::from(lines[y1 as usize]);
+                if self.band_bytes(u64::from(y1 - y0 + 1) * u64::from(pitch), more) > self.max_binding {
                     break;
                 }
-                y1 += 1;
+                (y1, n) = (y1 + 1, more);
             }
             if y1 == y0 {
-                let frags = u64::from(offsets[((y0 + 1) * pitch) as usize] - offsets[(y0 * pitch) as usize]);
                 return Err(GpuError::LineTooLarge {
                     y: y0,
-                    bytes: line_bytes.max(frags * FRAGMENT_BYTES),
+                    bytes: self.band_bytes(u64::from(pitch), u64::from(lines[y0 as usize])),
                     limit: self.max_binding,
                 });
             }
-            let (p0, p1) = ((y0 * pitch) as usize, (y1 * pitch) as usize);
-            let base = offsets[p0];
-            let band_offsets: Vec<u32> = offsets[p0..=p1].iter().map(|o| o - base).collect();
-            let band_fragments = &sorted[5 * base as usize..5 * offsets[p1] as usize];
-            let (w, i) = self.band(&Band {
-                offsets: &band_offsets,
-                fragments: band_fragments,
-                pixels: (p1 - p0) as u32,
-                width,
-                line: pitch,
-                background,
-            })?;
-            words.extend(w);
-            image.extend(i);
+            bands.push((y0, y1));
             y0 = y1;
         }
-        Ok((words, image))
+        let slots = slots(self.layers) as u64;
+        let mut words = Vec::with_capacity(if matches!(out, Out::Rows(_)) {
+            (u64::from(stored) * slots * 2) as usize
+        } else {
+            0
+        });
+        let (mut image, mut order) = (Vec::new(), Vec::new());
+        for &(y0, y1) in &bands {
+            // One band: the input as given; several: each band's fragments copied out, in order,
+            // with their indices in the input.
+            let (own, global): (Vec<GpuFragment>, Vec<u32>) = if bands.len() == 1 {
+                Default::default()
+            } else {
+                (0u32..)
+                    .zip(fragments)
+                    .filter(|(_, f)| (y0..y1).contains(&(f.pixel / width)))
+                    .map(|(i, f)| (*f, i))
+                    .unzip()
+            };
+            let band = Band {
+                fragments: if bands.len() == 1 { fragments } else { &own },
+                first: y0 * pitch,
+                pixels: (y1 - y0) * pitch,
+                width,
+                line: pitch,
+            };
+            let sorted = self.sorted(&band)?;
+            match out {
+                Out::Rows(background) => {
+                    let (w, i) = self.composite_band(&band, &sorted, background)?;
+                    words.extend(w);
+                    image.extend(i);
+                }
+                Out::Order => {
+                    let local = match &sorted.keys {
+                        Some(keys) => {
+                            let keys = self.download(keys, 8 * band.fragments.len() as u64)?;
+                            keys.chunks_exact(2).map(|k| k[1]).collect()
+                        }
+                        None => sorted.order,
+                    };
+                    let local = local.into_iter();
+                    if bands.len() == 1 {
+                        order.extend(local);
+                    } else {
+                        order.extend(local.map(|i| global[i as usize]));
+                    }
+                }
+            }
+        }
+        Ok(Output { words, image, order })
     }
 
-    /// One dispatch over `pixels` stored pixels.
-    fn band(&self, band: &Band) -> Result<(Vec<u32>, Vec<u32>), GpuError> {
-        let Band {
-            offsets,
-            fragments,
-            pixels,
-            width,
-            line,
-            background,
-        } = *band;
-        let device = &self.device;
-        let groups = pixels.div_ceil(WORKGROUP);
+    /// `(gx, gy, invocations per row)` of a 2-D dispatch of at least `invocations`.
+    fn grid(&self, invocations: u32) -> (u32, u32, u32) {
+        let groups = invocations.div_ceil(WORKGROUP);
         let gx = groups.clamp(1, self.max_groups);
-        let gy = groups.div_ceil(gx).max(1);
+        (gx, groups.div_ceil(gx).max(1), gx * WORKGROUP)
+    }
+
+    /// Uploads a band's fragments and sorts them by pixel ([`Sort`]).
+    fn sorted(&self, band: &Band) -> Result<Sorted, GpuError> {
+        let device = &self.device;
+        let init = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents,
+                usage,
+            })
+        };
+        let n = band.fragments.len() as u32;
+        // A binding may not be empty: a band without fragments binds one unused fragment.
+        let placeholder = [GpuFragment::zeroed()];
+        let words: &[GpuFragment] = if n == 0 { &placeholder } else { band.fragments };
+        let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+        if self.sort == Sort::Cpu {
+            // Stable counting sort by the band's stored pixel.
+            let local = |f: &GpuFragment| (f.pixel / band.width) * band.line + f.pixel % band.width - band.first;
+            let mut offsets = vec![0u32; band.pixels as usize + 1];
+            for f in band.fragments {
+                offsets[local(f) as usize + 1] += 1;
+            }
+            let most = offsets.iter().copied().max().unwrap_or(0);
+            for p in 0..band.pixels as usize {
+                offsets[p + 1] += offsets[p];
+            }
+            let mut cursor = offsets.clone();
+            let mut order = vec![0u32; n as usize];
+            for (index, f) in (0u32..).zip(band.fragments) {
+                let p = local(f) as usize;
+                order[cursor[p] as usize] = index;
+                cursor[p] += 1;
+            }
+            drop(cursor);
+            // The fragments themselves in pixel order: the composite reads them in sequence.
+            let in_order: Vec<GpuFragment> = order.iter().map(|&i| band.fragments[i as usize]).collect();
+            let words: &[GpuFragment] = if n == 0 { &placeholder } else { &in_order };
+            return scoped(
+                device,
+                || Sorted {
+                    fragments: init("fragments", bytemuck::cast_slice(words), storage),
+                    keys: None,
+                    offsets: init("offsets", bytemuck::cast_slice(&offsets), storage),
+                    most,
+                    order,
+                },
+                GpuError::Device,
+            );
+        }
+        let size = key_count(u64::from(n)) as u32;
+        let (most_buffer, most_back, sorted) = scoped(
+            device,
+            || {
+                let empty = |label, size, usage| {
+                    device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size,
+                        usage,
+                        mapped_at_creation: false,
+                    })
+                };
+                let fragments = init("fragments", bytemuck::cast_slice(words), storage);
+                let keys = empty("keys", 8 * u64::from(size), storage);
+                let offsets = empty("offsets", 4 * (u64::from(band.pixels) + 1), storage);
+                // Created zeroed (wgpu clears new buffers).
+                let most = empty("most", 4, storage);
+                let most_back = empty(
+                    "most readback",
+                    4,
+                    wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                );
+                // Dispatches: the keys, every bitonic step (k = 2, 4, .., size; j = k / 2, .., 1),
+                // the offsets. One uniform buffer holds all their parameters.
+                let mut steps = vec![(0u32, 0u32, 0usize, size)];
+                let mut k = 2;
+                while k <= size {
+                    let mut j = k / 2;
+                    while j > 0 {
+                        steps.push((k, j, 1, size / 2));
+                        j /= 2;
+                    }
+                    k *= 2;
+                }
+                steps.push((0, 0, 2, band.pixels + 1));
+                let stride = self.uniform_align as usize;
+                let mut uniform = vec![0u8; stride * steps.len()];
+                for (at, &(k, j, _, invocations)) in steps.iter().enumerate() {
+                    let params = SortParams {
+                        count: n,
+                        size,
+                        pitch: self.grid(invocations).2,
+                        k,
+                        j,
+                        width: band.width,
+                        line: band.line,
+                        first: band.first,
+                        pixels: band.pixels,
+                        stable: u32::from(self.stable),
+                        pad: [0; 2],
+                    };
+                    uniform[at * stride..at * stride + size_of::<SortParams>()]
+                        .copy_from_slice(bytemuck::bytes_of(&params));
+                }
+                let uniform = init("sort params", &uniform, wgpu::BufferUsages::UNIFORM);
+                let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+                for (at, &(_, _, pipeline, invocations)) in steps.iter().enumerate() {
+                    let pipeline = &self.sort_pipelines[pipeline];
+                    let params = wgpu::BufferBinding {
+                        buffer: &uniform,
+                        offset: (at * stride) as u64,
+                        size: wgpu::BufferSize::new(size_of::<SortParams>() as u64),
+                    };
+                    let buffers: &[(u32, &wgpu::Buffer)] = match at {
+                        0 => &[(1, &fragments), (2, &keys)],
+                        _ if at + 1 == steps.len() => &[(2, &keys), (3, &offsets), (4, &most)],
+                        _ => &[(2, &keys)],
+                    };
+                    let mut entries = vec![wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: wgpu::BindingResource::Buffer(params),
+                    }];
+                    entries.extend(buffers.iter().map(|&(binding, buffer)| wgpu::BindGroupEntry {
+                        binding,
+                        resource: buffer.as_entire_binding(),
+                    }));
+                    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                        label: Some("mlab-gpu sort"),
+                        layout: &pipeline.get_bind_group_layout(0),
+                        entries: &entries,
+                    });
+                    // One compute pass per dispatch: each step reads what the previous wrote.
+                    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("mlab-gpu sort"),
+                        timestamp_writes: None,
+                    });
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, &bind, &[]);
+                    let (gx, gy, _) = self.grid(invocations);
+                    pass.dispatch_workgroups(gx, gy, 1);
+                }
+                encoder.copy_buffer_to_buffer(&most, 0, &most_back, 0, 4);
+                self.queue.submit([encoder.finish()]);
+                (
+                    most,
+                    most_back,
+                    Sorted {
+                        fragments,
+                        keys: Some(keys),
+                        offsets,
+                        most: 0,
+                        order: Vec::new(),
+                    },
+                )
+            },
+            GpuError::Device,
+        )?;
+        let most = read(device, &most_back)?[0];
+        drop(most_buffer);
+        Ok(Sorted { most, ..sorted })
+    }
+
+    /// The first `bytes` of a `STORAGE | COPY_SRC` buffer, as words.
+    fn download(&self, buffer: &wgpu::Buffer, bytes: u64) -> Result<Vec<u32>, GpuError> {
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let back = scoped(
+            &self.device,
+            || {
+                let back = self.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("readback"),
+                    size: bytes,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let mut encoder = self
+                    .device
+                    .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+                encoder.copy_buffer_to_buffer(buffer, 0, &back, 0, bytes);
+                self.queue.submit([encoder.finish()]);
+                back
+            },
+            GpuError::Device,
+        )?;
+        read(&self.device, &back)
+    }
+
+    /// The composite dispatches of one sorted band (then its resolve, with a background).
+    fn composite_band(
+        &self,
+        band: &Band,
+        sorted: &Sorted,
+        background: Option<[u32; 4]>,
+    ) -> Result<(Vec<u32>, Vec<u32>), GpuError> {
+        let &Band {
+            pixels, width, line, ..
+        } = band;
+        let device = &self.device;
+        let (gx, gy, pitch) = self.grid(pixels);
         // Dispatches: one per CHUNK fragments of the most crowded pixel.
-        let most = offsets.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
-        let passes = most.div_ceil(CHUNK).max(1);
+        let passes = sorted.most.div_ceil(CHUNK).max(1);
         let params = |pass: u32| Params {
             pixels,
-            pitch: gx * WORKGROUP,
+            pitch,
             spans: u32::from(self.layout == Layout::Spans),
             first: pass * CHUNK,
             width,
             line,
-            pad: [0; 2],
+            sorted: u32::from(sorted.keys.is_none()),
+            pad: 0,
             background: background.unwrap_or([0; 4]),
         };
         // RGBA8 pixels of the band: its lines times the width (at least one word: no empty
         // binding).
         let image_bytes = u64::from(pixels / line.max(1)) * u64::from(width) * 4;
         let out_bytes = u64::from(pixels) * slots(self.layers) as u64 * 8;
-        // A binding may not be empty: a band without fragments binds one unused fragment.
-        let placeholder = [0u32; 5];
-        let fragments = if fragments.is_empty() {
-            &placeholder[..]
-        } else {
-            fragments
-        };
         let make = || {
             let init = |label, contents: &[u8], usage| {
                 device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -396,12 +724,8 @@ impl Compositor {
                     usage,
                 })
             };
-            let offsets = init("offsets", bytemuck::cast_slice(offsets), wgpu::BufferUsages::STORAGE);
-            let fragments = init(
-                "fragments",
-                bytemuck::cast_slice(fragments),
-                wgpu::BufferUsages::STORAGE,
-            );
+            // Sort::Cpu: binding 5 is not read, but a binding may not be empty.
+            let no_keys = init("no keys", &[0; 8], wgpu::BufferUsages::STORAGE);
             let rows = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("rows"),
                 size: out_bytes,
@@ -417,9 +741,15 @@ impl Compositor {
             let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
             for pass in 0..passes {
                 let params = init("params", bytemuck::bytes_of(&params(pass)), wgpu::BufferUsages::UNIFORM);
-                let entries = [&params, &offsets, &fragments, &rows];
-                let entries: Vec<wgpu::BindGroupEntry> = (0u32..)
-                    .zip(entries)
+                let entries = [
+                    (0, &params),
+                    (1, &sorted.offsets),
+                    (2, &sorted.fragments),
+                    (3, &rows),
+                    (5, sorted.keys.as_ref().unwrap_or(&no_keys)),
+                ];
+                let entries: Vec<wgpu::BindGroupEntry> = entries
+                    .into_iter()
                     .map(|(binding, buffer)| wgpu::BindGroupEntry {
                         binding,
                         resource: buffer.as_entire_binding(),

@@ -27,7 +27,8 @@ pub enum GpuError {
     LineTooLarge {
         /// The line.
         y: u32,
-        /// Bytes it needs in one binding (its rows, or its fragments at 20 bytes each).
+        /// Bytes it needs in one binding (the largest of its rows, its offsets, its fragments at
+        /// 24 bytes each and its sort keys at 8 bytes per key, padded to a power of two).
         bytes: u64,
         /// The binding limit in bytes.
         limit: u64,

@@ -19,7 +19,7 @@ pub mod cpu;
 mod error;
 pub mod wgsl;
 
-pub use compositor::{Compositor, Gpu, GpuFragment, Layout, background_q15};
+pub use compositor::{Compositor, Gpu, GpuFragment, Layout, Sort, background_q15};
 pub use error::GpuError;
 
 /// The arithmetic, chosen at run time (the kernel's [`mlab::Paper`] and [`mlab::Unbiased`]).

@@ -18,6 +18,7 @@
 //! | [`mlab()`] | [`KERNEL`], a header for `M` and the arithmetic, `mlab_insert` (Listing 1) | |
 //! | [`hybrid()`] | [`KERNEL`], a header for `K` and the arithmetic, `ht_insert` (Listing 2), `ht_resolve_rgba8` | |
 //! | [`compositor()`] | [`mlab()`] or [`hybrid()`] followed by the compositor's entry point and bindings | [`crate::Compositor`] |
+//! | [`SORT`] | the compositor's stable sort by pixel (a module of its own) | [`crate::Compositor`] |
 //!
 //! A shader includes [`mlab()`] (or [`hybrid()`]) and calls, per fragment:
 //!
@@ -55,6 +56,12 @@ pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
 /// `ht_tail_fields` and [`KERNEL`] ([`hybrid()`] has them all). The background is the
 /// `vec4<u32>` of [`crate::background_q15`], computed on the CPU.
 pub const HT_RESOLVE: &str = include_str!("wgsl/ht_resolve.wgsl");
+
+/// The compositor's sort by pixel ([`crate::Sort::Gpu`]), a module of its own: a bitonic sort
+/// of `(stored pixel, submission index)` pairs (unique keys: the stable order), entry points
+/// `sort_init`, `sort_step` (one compare-exchange per invocation) and `sort_offsets_of` (a
+/// binary search per pixel); binding layout at the top of the text and in `docs/gpu.md`.
+pub const SORT: &str = include_str!("wgsl/sort.wgsl");
 
 /// The compositor's bindings and helpers (see [`compositor()`]).
 const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");

@@ -7,7 +7,7 @@ mod common;
 use common::{Rng, gpu};
 use mlab::glam::Vec3;
 use mlab::{Background, FragmentError, Layers};
-use mlab_gpu::{Arith, Compositor, GpuError, GpuFragment, Layout, cpu, wgsl};
+use mlab_gpu::{Arith, Compositor, GpuError, GpuFragment, Layout, Sort, cpu, wgsl};
 
 fn all_layers() -> impl Iterator<Item = Layers> {
     Layers::SIZES
@@ -221,7 +221,7 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
     for layout in [Layout::PixelMajor, Layout::Spans] {
         let mut c = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, layout).expect("compositor");
         let whole = c.composite(w, h, &frags).expect("one band");
-        // About 10 KB of fragments per line (17 per pixel, 20 bytes each) and 1 KB of rows:
+        // About 12 KB of fragments per line (17 per pixel, 24 bytes each) and 1 KB of rows:
         // 16 KiB bindings split the frame into bands of one line.
         c.set_max_binding_bytes(16384);
         assert_eq!(c.max_binding_bytes(), 16384);
@@ -349,7 +349,7 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
 fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
     let Some(gpu) = gpu("long_pixels") else { return };
     // Pixel 0: 100 000 fragments (lavapipe ends an invocation's loops after 65,535 iterations:
-    // three dispatches of 32 768); the others a few, so later dispatches leave them untouched.
+    // four dispatches of at most 32 768); the others a few, so later dispatches leave them untouched.
     let mut rng = Rng(5);
     let mut frags: Vec<GpuFragment> = (0..100_000).map(|_| rng.fragment(0)).collect();
     frags.extend((0..500).map(|_| rng.fragment_in(6)));
@@ -439,4 +439,117 @@ fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
     );
     ht.set_max_binding_bytes(16384);
     assert_eq!(ht.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
+}
+
+// The sort by pixel on the GPU (`Sort::Gpu`). The default is `Sort::Cpu` on a software adapter
+// (lavapipe: every test above goes through the CPU sort there), so this test sets it.
+
+/// The stable order by pixel: the indices the compositor must insert in.
+fn stable_order(frags: &[GpuFragment]) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..frags.len() as u32).collect();
+    order.sort_by_key(|&i| frags[i as usize].pixel); // `sort_by_key` is stable
+    order
+}
+
+/// Coplanar (two depths), light fragments (alpha 0.07-0.12: forty leave the pixel visible
+/// behind them) of distinct colors, `per` for each of `w * h` pixels, pixels in shuffled order:
+/// MLAB's merges make the rows depend on the order within a pixel.
+fn shuffled_coplanar(rng: &mut Rng, w: u32, h: u32, per: u32) -> Vec<GpuFragment> {
+    let mut pixels: Vec<u32> = (0..w * h).flat_map(|p| std::iter::repeat_n(p, per as usize)).collect();
+    for i in (1..pixels.len()).rev() {
+        pixels.swap(i, rng.below(i as u32 + 1) as usize);
+    }
+    pixels
+        .into_iter()
+        .map(|pixel| {
+            let a = 0.07 + 0.05 * rng.unit();
+            GpuFragment {
+                pixel,
+                rgba: [rng.unit() * a, rng.unit() * a, rng.unit() * a, a],
+                depth: rng.below(2) as f32,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn the_gpu_sort_gives_the_stable_order_and_the_cpus_rows() {
+    let Some(gpu) = gpu("gpu_sort") else { return };
+    let mut rng = Rng(0x736f_7274);
+    let shuffled = shuffled_coplanar(&mut rng, 37, 11, 40); // 16,280: not a power of two
+    let one = vec![rng.fragment(17)];
+    let odd = random_stream(&mut rng, 5, 3, 4_021);
+    let crowded: Vec<GpuFragment> = (0..100_000).map(|_| rng.fragment(0)).collect();
+    let cases: [(&str, u32, u32, &[GpuFragment]); 5] = [
+        ("shuffled", 37, 11, &shuffled),
+        ("odd count", 5, 3, &odd),
+        ("one", 37, 11, &one),
+        ("none", 37, 11, &[]),
+        ("one pixel", 1, 1, &crowded),
+    ];
+    for layers in [Layers::Mlab(2), Layers::Hybrid(3)] {
+        let mut c = Compositor::new(&gpu, layers, Arith::Unbiased, Layout::Spans).expect("compositor");
+        let software = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
+        assert_eq!(c.sort(), if software { Sort::Cpu } else { Sort::Gpu });
+        c.set_sort(Sort::Gpu);
+        for (name, w, h, frags) in cases {
+            let want = stable_order(frags);
+            assert_eq!(c.order(w, h, frags).expect("gpu order"), want, "{name}");
+            check(&c, layers, Arith::Unbiased, Layout::Spans, w, h, frags);
+            c.set_sort(Sort::Cpu);
+            assert_eq!(c.order(w, h, frags).expect("cpu order"), want, "{name}, Sort::Cpu");
+            check(&c, layers, Arith::Unbiased, Layout::Spans, w, h, frags);
+            c.set_sort(Sort::Gpu);
+        }
+    }
+}
+
+#[test]
+fn the_gpu_sort_over_several_bands_is_the_stable_order() {
+    let Some(gpu) = gpu("gpu_sort_bands") else { return };
+    let mut rng = Rng(0x6261_6e64);
+    // 30 x 40 with 8 fragments per pixel: about 5.8 KB of fragments per line, so a 16 KiB
+    // binding cap gives bands of two lines (20 bands), each sorted on its own.
+    let frags = shuffled_coplanar(&mut rng, 30, 40, 8);
+    for layout in [Layout::PixelMajor, Layout::Spans] {
+        let mut c = Compositor::new(&gpu, Layers::Mlab(3), Arith::Paper, layout).expect("compositor");
+        c.set_sort(Sort::Gpu);
+        c.set_max_binding_bytes(16384);
+        assert_eq!(c.order(30, 40, &frags).expect("order"), stable_order(&frags));
+        check(&c, Layers::Mlab(3), Arith::Paper, layout, 30, 40, &frags);
+    }
+}
+
+#[test]
+fn an_unstable_sort_would_fail_these_tests() {
+    let Some(gpu) = gpu("unstable_sort") else { return };
+    let mut rng = Rng(0x756e_7374);
+    let (w, h) = (37, 11);
+    let frags = shuffled_coplanar(&mut rng, w, h, 40);
+    let layers = Layers::Mlab(2);
+    let want = cpu::composite(layers, Arith::Unbiased, Layout::Spans, w, h, &frags).expect("cpu");
+    // On the CPU: swapping two fragments in the middle of pixel 0 (its rows are full, so both
+    // are merged) changes the kernel's rows.
+    let at: Vec<usize> = (0..frags.len()).filter(|&i| frags[i].pixel == 0).collect();
+    let mut swapped = frags.clone();
+    swapped.swap(at[at.len() / 2 - 1], at[at.len() / 2]);
+    let other = cpu::composite(layers, Arith::Unbiased, Layout::Spans, w, h, &swapped).expect("cpu");
+    assert!(other != want, "the order within a pixel changes the kernel's bytes");
+    // On the GPU: the stable sort gives the kernel's rows; comparing pixels alone (an unstable
+    // sort) reorders fragments within pixels, and the comparison of the rows sees it.
+    let mut c = Compositor::new(&gpu, layers, Arith::Unbiased, Layout::Spans).expect("compositor");
+    c.set_sort(Sort::Gpu);
+    assert_eq!(c.composite(w, h, &frags).expect("stable"), want);
+    c.set_stable_sort_for_tests(false);
+    let order = c.order(w, h, &frags).expect("unstable order");
+    let mut by_pixel = order.clone();
+    by_pixel.sort_by_key(|&i| frags[i as usize].pixel);
+    assert_eq!(order, by_pixel, "still sorted by pixel");
+    assert_ne!(order, stable_order(&frags), "but not in submission order within pixels");
+    let rows = c.composite(w, h, &frags).expect("unstable");
+    let differ = (0..rows.len() / 2)
+        .filter(|&s| rows[2 * s..2 * s + 2] != want[2 * s..2 * s + 2])
+        .count();
+    println!("unstable sort: {differ} of {} slots differ", rows.len() / 2);
+    assert!(differ > 0, "an unstable sort changes the rows");
 }

@@ -1,13 +1,16 @@
 // The compositor's entry point (mlab_gpu::Compositor): one invocation per stored pixel, which
-// inserts its fragments in submission order (the CPU sorted them by pixel, stably) and writes its
-// slots. Bindings (group 0):
+// inserts its fragments in submission order (sorted by pixel, stably: sort.wgsl on the GPU, or
+// the CPU) and writes its slots. Bindings (group 0):
 //   0 uniform          CompositeParams
 //   1 storage, read    offsets: array<u32>, pixels + 1 entries; pixel p's fragments are
-//                      offsets[p] .. offsets[p + 1]
-//   2 storage, read    fragments: array<u32>, 5 words per fragment: bits of premultiplied
-//                      R, G, B, alpha, depth (f32)
+//                      positions offsets[p] .. offsets[p + 1] in pixel order
+//   2 storage, read    fragments: array<u32>, 6 words per fragment (the layout of
+//                      mlab_gpu::GpuFragment: pixel, bits of premultiplied R, G, B, alpha,
+//                      depth (f32)), in submission order (or in pixel order: `sorted`)
 //   3 storage, rw      rows: array<vec2<u32>>, the framebuffer's storage (Row::words)
 //   4 storage, rw      image: array<u32>, RGBA8 pixels (entry point `resolve`, MLAB only)
+//   5 storage, read    order: array<vec2<u32>>, the fragments sorted by pixel, stably: (stored
+//                      pixel of the band, index into fragments); `composite` reads the index
 struct CompositeParams {
     // Stored pixels in this dispatch (padding lanes of spans included).
     pixels: u32,
@@ -21,8 +24,10 @@ struct CompositeParams {
     // Image width, and stored pixels per line (the width, or 8 * ceil(width / 8) for spans).
     width: u32,
     line: u32,
-    pad0: u32,
-    pad1: u32,
+    // 1: the fragments are already in pixel order (mlab_gpu::Sort::Cpu), binding 5 is not read;
+    // 0: fragment i in pixel order is fragments[order[i].y] (mlab_gpu::Sort::Gpu).
+    sorted: u32,
+    pad: u32,
     // The background for `resolve`: three channels as mlab_gpu::background_q15 gives them, and
     // w = 1 (opaque) or 0 (Background::Transparent).
     background: vec4<u32>,
@@ -39,6 +44,7 @@ const COMPOSITE_CHUNK: u32 = 32768u;
 @group(0) @binding(1) var<storage, read> composite_offsets: array<u32>;
 @group(0) @binding(2) var<storage, read> composite_fragments: array<u32>;
 @group(0) @binding(3) var<storage, read_write> composite_rows: array<vec2<u32>>;
+@group(0) @binding(5) var<storage, read> composite_order: array<vec2<u32>>;
 
 // Index of slot j (of `slots` per pixel) of stored pixel p.
 fn composite_slot(p: u32, j: u32, slots: u32) -> u32 {
@@ -48,8 +54,12 @@ fn composite_slot(p: u32, j: u32, slots: u32) -> u32 {
     return p * slots + j;
 }
 
+// The row of the i-th fragment in pixel order.
 fn composite_row(i: u32) -> vec2<u32> {
-    let k = 5u * i;
-    let c = vec3<u32>(composite_fragments[k], composite_fragments[k + 1u], composite_fragments[k + 2u]);
-    return mlab_quantize(c, composite_fragments[k + 3u], composite_fragments[k + 4u]);
+    var k = 6u * i;
+    if (composite_params.sorted == 0u) {
+        k = 6u * composite_order[i].y;
+    }
+    let c = vec3<u32>(composite_fragments[k + 1u], composite_fragments[k + 2u], composite_fragments[k + 3u]);
+    return mlab_quantize(c, composite_fragments[k + 4u], composite_fragments[k + 5u]);
 }
