@@ -22,6 +22,14 @@ driver() { # bench id -> driver symbol
         *) local n=${id#*/}; echo "batch::${n%%/*}" ;;
       esac ;;
     kernel)
+      case $id in
+        resolve_rgba8/mlab_scalar/*) echo kernel::resolve_scalar; return ;;
+        resolve_rgba8/mlab_lanes/*) echo kernel::resolve_lanes; return ;;
+        resolve_rgba8/mlab_lanes_f32/*) echo kernel::resolve_lanes_f32; return ;;
+        resolve_rgba8/ht_int*) echo kernel::resolve_ht_int; return ;;
+        resolve_rgba8/ht_f32*) echo kernel::resolve_ht_f32; return ;;
+        resolve_rgba8/*) echo "?"; return ;; # ht_scalar, ht_lanes: closures, no driver symbol
+      esac
       local n=${id#*/}; n=${n%%/*}; n=${n%_paper}
       case $n in
         mlab_scalar) echo kernel::mlab_scalar ;; mlab_lanes) echo kernel::mlab_lanes ;;
