@@ -426,7 +426,11 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
 
     #[inline(always)]
     fn resolve_unit<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
-        Self::view::<L, _>(unit, lanes::hybrid_resolve_parts).unwrap_or(CLEAR_LANES)
+        if L::SPANS {
+            return Self::parts(unit).map_or(CLEAR_LANES, |(h, t)| lanes::hybrid_resolve_parts(h, t));
+        }
+        let (head, tails) = Self::gather(unit);
+        lanes::hybrid_resolve_parts(&head, &tails)
     }
 
     #[inline(always)]

@@ -246,7 +246,7 @@ impl ResolvedLanes {
     }
 
     /// The 8 pixels for `background` ([`Resolved::pixel`] per lane).
-    #[inline]
+    #[inline(always)]
     pub fn pixels(&self, background: Background) -> [Vec4; LANES] {
         core::array::from_fn(|i| self.get(i).unwrap_or(Resolved::CLEAR).pixel(background))
     }
