@@ -280,6 +280,7 @@ fn hybrid_stream_k<const K: usize, A: Model>(input: &mut Input) {
         check_invariants(ht.head(), &rows);
         check_resolved(ht.resolve(), K as f32 + tail_color_limit::<A>(), &rows);
     }
+    check_ht_int_resolve(&ht, &rows);
     let n = frags.len();
     let accepted: Vec<_> = frags.iter().map(parts).collect();
     if n <= K {
@@ -321,6 +322,35 @@ fn hybrid_stream_k<const K: usize, A: Model>(input: &mut Input) {
             a.color.to_array().map(f32::to_bits),
             b.color.to_array().map(f32::to_bits)
         );
+    }
+}
+
+/// The integer RGBA8 resolve of HT (`check_hybrid_span` compares the kernel's with the
+/// reference formula after every fragment): the reference against the exact composite of the
+/// head and tail within the derived bound (`mlab_reference::resolve_int::ht_bound`), over a
+/// transparent, a black, a white and a colored background.
+fn check_ht_int_resolve<const K: usize, A: Model>(ht: &Hybrid<K, A>, rows: &[Row]) {
+    for bg in [
+        Background::Transparent,
+        Background::Opaque(Vec3::ZERO),
+        Background::Opaque(Vec3::ONE),
+        Background::Opaque(Vec3::new(0.2, 0.5, 0.7)),
+    ] {
+        let (head, tail) = (ht.head().as_slice(), ht.tail());
+        let got = mlab_reference::resolve_int::ht_rgba8(head, tail, bg);
+        let exact = mlab_reference::resolve_int::ht_exact(head, tail, bg);
+        let bound = mlab_reference::resolve_int::ht_bound(head, tail, bg);
+        for ch in 0..4 {
+            let err = (f64::from(got[ch]) - exact[ch]).abs();
+            assert!(
+                err <= bound[ch] + 1e-9,
+                "K = {K} {} integer HT resolve {bg:?}: channel {ch} {} vs exact {} (bound {}) after {rows:?}",
+                A::NAME,
+                got[ch],
+                exact[ch],
+                bound[ch]
+            );
+        }
     }
 }
 
@@ -751,8 +781,8 @@ pub trait Layout {
     fn ref_insert(slots: &mut [Row], row: Row);
     /// The resolve of one pixel's slots, split here.
     fn ref_resolve(slots: &[Row]) -> Resolved;
-    /// What `Framebuffer::resolve_rgba8` writes for one pixel's slots: MLAB the reference
-    /// integer resolve (`mlab_reference::resolve_int`), HT `to_rgba8` of the f32 resolve.
+    /// What `Framebuffer::resolve_rgba8` writes for one pixel's slots: the reference integer
+    /// resolve (`mlab_reference::resolve_int`), MLAB's or HT's.
     fn ref_rgba8(slots: &[Row], bg: Background) -> [u8; 4];
     /// A cleared pixel.
     fn cleared(slots: &mut [Row]);
@@ -896,7 +926,8 @@ impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
         .resolve()
     }
     fn ref_rgba8(slots: &[Row], bg: Background) -> [u8; 4] {
-        to_rgba8(Self::ref_resolve(slots).pixel(bg))
+        let tail = <A::Tail as TailFormat>::from_bytes(slots[K].to_bytes());
+        mlab_reference::resolve_int::ht_rgba8(&slots[..K], tail, bg)
     }
     fn cleared(slots: &mut [Row]) {
         slots[..K].fill(Row::EMPTY);
