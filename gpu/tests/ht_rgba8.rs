@@ -351,37 +351,19 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Opaque fragments in random order, and coplanar ones: all-opaque tails (S_a = 255 n).
-    streams.push(
-        (0..3000)
-            .map(|_| {
-                let mut f = rng.fragment_in(n);
-                f.rgba[3] = 1.0;
-                f
-            })
-            .collect(),
-    );
-    streams.push(
-        (0..3000)
-            .map(|_| {
-                let mut f = rng.fragment_in(n);
-                f.depth = 1.0;
-                f
-            })
-            .collect(),
-    );
+    streams.push(rng.edited(n, 3000, |_, f| {
+        f.rgba[3] = 1.0;
+    }));
+    streams.push(rng.edited(n, 3000, |_, f| {
+        f.depth = 1.0;
+    }));
     // Additive light only (alpha 0: tails with S_a = 0 and a count) and invisible fragments.
-    streams.push(
-        (0..3000)
-            .map(|i| {
-                let mut f = rng.fragment_in(n);
-                f.rgba[3] = 0.0;
-                if i % 3 == 0 {
-                    f.rgba = [0.0; 4];
-                }
-                f
-            })
-            .collect(),
-    );
+    streams.push(rng.edited(n, 3000, |i, f| {
+        f.rgba[3] = 0.0;
+        if i % 3 == 0 {
+            f.rgba = [0.0; 4];
+        }
+    }));
     // Saturating tails: bright fragments, half opaque, into 3 pixels (colors, alpha and the
     // default tail's count saturate).
     streams.push(
@@ -394,16 +376,10 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Mid alphas around the routes' boundary (mean alpha near 1/4) with random depths.
-    streams.push(
-        (0..4000)
-            .map(|i| {
-                let mut f = rng.fragment_in(n);
-                f.rgba[3] = [0.25, 64.0 / 255.0, 63.0 / 255.0, 0.5][i % 4];
-                f.rgba[0] = f.rgba[0].min(f.rgba[3]);
-                f
-            })
-            .collect(),
-    );
+    streams.push(rng.edited(n, 4000, |i, f| {
+        f.rgba[3] = [0.25, 64.0 / 255.0, 63.0 / 255.0, 0.5][i % 4];
+        f.rgba[0] = f.rgba[0].min(f.rgba[3]);
+    }));
     streams
 }
 

@@ -112,34 +112,16 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Opaque fragments in random order (a z-buffer), and coplanar opaque ones.
-    streams.push(
-        (0..10_000)
-            .map(|_| {
-                let mut f = rng.fragment_in(n);
-                f.rgba[3] = 1.0;
-                f
-            })
-            .collect(),
-    );
-    streams.push(
-        (0..10_000)
-            .map(|_| {
-                let mut f = rng.fragment_in(n);
-                f.depth = 1.0;
-                f
-            })
-            .collect(),
-    );
+    streams.push(rng.edited(n, 10_000, |_, f| {
+        f.rgba[3] = 1.0;
+    }));
+    streams.push(rng.edited(n, 10_000, |_, f| {
+        f.depth = 1.0;
+    }));
     // Equal depths, -0 against +0, extremes of f32, subnormal depths.
-    streams.push(
-        (0..10_000)
-            .map(|i| {
-                let mut f = rng.fragment_in(n);
-                f.depth = [0.0, -0.0, 1e-45, -1e-45, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 3.0][i % 8];
-                f
-            })
-            .collect(),
-    );
+    streams.push(rng.edited(n, 10_000, |i, f| {
+        f.depth = [0.0, -0.0, 1e-45, -1e-45, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 3.0][i % 8];
+    }));
     // Saturating tails: thousands of bright fragments into a few pixels.
     streams.push(
         (0..30_000u32)
@@ -151,18 +133,12 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Additive light only (alpha 0) and invisible fragments (nothing at all).
-    streams.push(
-        (0..10_000)
-            .map(|i| {
-                let mut f = rng.fragment_in(n);
-                f.rgba[3] = 0.0;
-                if i % 2 == 0 {
-                    f.rgba = [0.0, 0.0, 0.0, 0.0];
-                }
-                f
-            })
-            .collect(),
-    );
+    streams.push(rng.edited(n, 10_000, |i, f| {
+        f.rgba[3] = 0.0;
+        if i % 2 == 0 {
+            f.rgba = [0.0, 0.0, 0.0, 0.0];
+        }
+    }));
     streams
 }
 

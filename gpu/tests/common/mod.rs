@@ -148,4 +148,16 @@ impl Rng {
         let p = self.below(pixels);
         self.fragment(p)
     }
+
+    /// `count` fragments for random pixels of `pixels`, fragment `i` changed by `edit(i, f)`:
+    /// the adversarial streams of the tests (opaque, coplanar, additive, ...).
+    pub fn edited(&mut self, pixels: u32, count: usize, edit: impl Fn(usize, &mut GpuFragment)) -> Vec<GpuFragment> {
+        (0..count)
+            .map(|i| {
+                let mut f = self.fragment_in(pixels);
+                edit(i, &mut f);
+                f
+            })
+            .collect()
+    }
 }
