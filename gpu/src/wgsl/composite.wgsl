@@ -8,7 +8,7 @@
 //                      mlab_gpu::GpuFragment: pixel, bits of premultiplied R, G, B, alpha,
 //                      depth (f32)), in submission order (or in pixel order: `sorted`)
 //   3 storage, rw      rows: array<vec2<u32>>, the framebuffer's storage (Row::words)
-//   4 storage, rw      image: array<u32>, RGBA8 pixels (entry point `resolve`, MLAB only)
+//   4 storage, rw      image: array<u32>, RGBA8 pixels (entry point `resolve`)
 //   5 storage, read    order: array<vec2<u32>>, the fragments sorted by pixel, stably: (stored
 //                      pixel of the band, index into fragments); `composite` reads the index
 struct CompositeParams {
@@ -45,6 +45,24 @@ const COMPOSITE_CHUNK: u32 = 32768u;
 @group(0) @binding(2) var<storage, read> composite_fragments: array<u32>;
 @group(0) @binding(3) var<storage, read_write> composite_rows: array<vec2<u32>>;
 @group(0) @binding(5) var<storage, read> composite_order: array<vec2<u32>>;
+// Written only by the entry point `resolve` (composite_resolve.wgsl, composite_resolve_ht.wgsl).
+@group(0) @binding(4) var<storage, read_write> composite_image: array<u32>;
+
+// No image pixel (composite_image_index).
+const COMPOSITE_NONE: u32 = 0xffffffffu;
+
+// The image index of stored pixel p of a `resolve` dispatch, or COMPOSITE_NONE past the
+// dispatch's pixels and on the padding lanes of spans.
+fn composite_image_index(p: u32) -> u32 {
+    if (p >= composite_params.pixels) {
+        return COMPOSITE_NONE;
+    }
+    let x = p % composite_params.line;
+    if (x >= composite_params.width) {
+        return COMPOSITE_NONE;
+    }
+    return (p / composite_params.line) * composite_params.width + x;
+}
 
 // Index of slot j (of `slots` per pixel) of stored pixel p.
 fn composite_slot(p: u32, j: u32, slots: u32) -> u32 {
