@@ -48,6 +48,21 @@ const COMPOSITE_CHUNK: u32 = 32768u;
 // Written only by the entry point `resolve` (composite_resolve.wgsl, composite_resolve_ht.wgsl).
 @group(0) @binding(4) var<storage, read_write> composite_image: array<u32>;
 
+// The fragments stored pixel p inserts in this `composite` dispatch, as positions start .. end
+// in pixel order (`composite_row`); start > end: nothing to do (past the dispatch's pixels, or an
+// earlier dispatch inserted all of the pixel's fragments and its rows are final).
+fn composite_range(p: u32) -> vec2<u32> {
+    if (p >= composite_params.pixels) {
+        return vec2<u32>(1u, 0u);
+    }
+    let start = composite_offsets[p] + composite_params.first;
+    let end = min(composite_offsets[p + 1u], start + COMPOSITE_CHUNK);
+    if (composite_params.first != 0u && start >= end) {
+        return vec2<u32>(1u, 0u);
+    }
+    return vec2<u32>(start, end);
+}
+
 // No image pixel (composite_image_index).
 const COMPOSITE_NONE: u32 = 0xffffffffu;
 
