@@ -189,7 +189,7 @@ pub(crate) fn write_spans<T: Copy>(
 /// [`write_spans`] with the whole spans of each line written by `whole` from the line's
 /// `line_rows` rows of `rows` (a framebuffer's own loop, without index maths or a bounds
 /// check per span). Two writers, not one taking a closure per line: written as one, the
-/// resolves ran 2 to 7 % more instructions (callgrind, `docs/performance.md`).
+/// resolves ran 2 to 10 % more instructions (callgrind, `docs/performance.md`).
 #[expect(
     clippy::cast_possible_truncation,
     reason = "span and line indices are below the u32 width and height"
@@ -340,7 +340,9 @@ pub trait Framebuffer {
     }
 
     /// Resolve the 8 pixels of a span straight to RGBA8 (the integer resolve, see the trait
-    /// docs); lanes past the edge, and every lane of a span outside, are an empty pixel's.
+    /// docs; this default, for a framebuffer of another crate, is [`to_rgba8`](crate::to_rgba8)
+    /// of [`resolve_span`](Self::resolve_span)); lanes past the edge, and every lane of a span
+    /// outside, are an empty pixel's.
     #[inline]
     fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
         self.resolve_span(span, y).unwrap_or(CLEAR_LANES).rgba8(background)
