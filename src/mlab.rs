@@ -67,13 +67,15 @@ pub(crate) fn insert_lanes<A: Arithmetic, L: RowLanes, S: Slot<L>, const M: usiz
     for (i, slot) in b.iter_mut().enumerate() {
         let row = slot.load();
         let swap = f.depth_le(row) & on; // if (f.z <= B[i].z)
-        let front = L::select(swap, f, row); // B[i] = f
         if i + 1 < M {
-            f = L::select(swap, row, f); // f = temp
+            // B[i] = f; f = temp.
+            let (front, next) = L::swap(swap, f, row);
             slot.store(front);
+            f = next;
         } else {
             // Compression (merge last two rows): the row pushed out (`f` after the swap, B[m]
             // in the listing) merged behind `front`.
+            let front = L::select(swap, f, row);
             slot.store(L::select(on, L::merge_pair::<A>(swap, f, row), front));
         }
     }

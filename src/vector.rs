@@ -17,6 +17,15 @@ pub(crate) trait RowLanes: Copy {
     fn depth_le(self, other: Self) -> Self::Mask;
     /// `if mask { a } else { b }` per lane.
     fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
+    /// The swap of Listing 1's bubble step: `(select(mask, a, b), select(mask, b, a))`, the
+    /// row stored back to the slot `b` was loaded from and the row carried to the next layer.
+    /// A lane type may compute the stored one with other instructions so that the compiler
+    /// cannot fold its select and the store into a masked store (`vmaskmovpd`, which AMD CPUs
+    /// microcode: issue 31).
+    #[inline(always)]
+    fn swap(mask: Self::Mask, a: Self, b: Self) -> (Self, Self) {
+        (Self::select(mask, a, b), Self::select(mask, b, a))
+    }
     /// Eq. 7-8 per lane in the arithmetic `A` ([`Arithmetic::merge`]).
     fn merge<A: Arithmetic>(front: Self, back: Self) -> Self;
     /// Per lane, `merge(a, b)` where `a_first`, else `merge(b, a)`: the last step of
