@@ -417,10 +417,51 @@ fn resolve(c: &mut Criterion) {
     g.finish();
 }
 
+/// The memory floor of a span insert (issue 31): the same span accesses as `mlab_lanes/M`, each
+/// span read and written back whole (`M x 64` bytes: 32 bytes per fragment at `M = 4`) with
+/// nothing computed but one xor per register, so that no insert can be faster than this
+/// read-modify-write on this machine.
+#[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
+fn span_rmw<const M: usize>(spans: &mut [MlabSpan<M>], stream: &[Step]) {
+    for s in stream {
+        let rows: [u64; LANES] = bytemuck::cast(s.rows);
+        for layer in spans[s.span].iter_mut() {
+            let mut words: [u64; LANES] = bytemuck::cast(*layer);
+            for (w, r) in words.iter_mut().zip(rows) {
+                *w ^= r;
+            }
+            *layer = bytemuck::cast(words);
+        }
+    }
+}
+
+/// `memory_floor/{l2,stream}/{span_rmw,mlab_lanes}/M`: the floor and the insert on the random
+/// stream into the benches' 128 x 128 frame (`l2`: 512 KiB of spans at `M = 4`, resident in
+/// the L2 cache of the machines we measure on) and into a 1920 x 1080 frame (`stream`: 66 MB at
+/// `M = 4`, beyond the L3 cache: every access goes to memory). The ratio of the two is the
+/// insert's cost in units of the floor (docs/performance.md).
+fn memory_floor(c: &mut Criterion) {
+    const BIG_SPANS: usize = 1920 * 1080 / LANES;
+    for (name, spans_n) in [("memory_floor/l2", SPANS), ("memory_floor/stream", BIG_SPANS)] {
+        let stream = random_stream(spans_n);
+        let mut g = c.benchmark_group(name);
+        g.throughput(Throughput::Elements(fragments(&stream)));
+        macro_rules! each {
+            ($($m:literal),*) => {$(
+                let mut spans = vec![[[Row::EMPTY; LANES]; $m]; spans_n];
+                g.bench_function(BenchmarkId::new("span_rmw", $m), |b| b.iter(|| span_rmw::<$m>(&mut spans, black_box(&stream))));
+                g.bench_function(BenchmarkId::new("mlab_lanes", $m), |b| b.iter(|| mlab_lanes::<Unbiased, $m>(&mut spans, black_box(&stream))));
+            )*};
+        }
+        each!(4, 8);
+        g.finish();
+    }
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().warm_up_time(std::time::Duration::from_millis(500)).measurement_time(std::time::Duration::from_secs(2)).sample_size(30);
-    targets = insert, insert_small, resolve
+    targets = insert, insert_small, resolve, memory_floor
 }
 criterion_main!(benches);
 
