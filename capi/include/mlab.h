@@ -184,17 +184,9 @@ typedef struct MlabFramebuffer {
    */
   uint32_t height;
   /**
-   * Private: an `MlabMethod`.
+   * Private: `layers - 1 + 8 * method + 16 * arithmetic`.
    */
-  uint32_t method;
-  /**
-   * Private: `M` or `K`.
-   */
-  uint32_t layers;
-  /**
-   * Private: an `MlabArithmetic`.
-   */
-  uint32_t arithmetic;
+  uint32_t kind;
   /**
    * Private: set by a successful init.
    */

@@ -46,8 +46,8 @@ use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::lanes::FragmentLanes;
 use mlab::{
-    Background, DynFramebuffer, Fragment, FragmentError, Framebuffer, FramebufferError, Layers, Paper, Row,
-    SpanBatcher, Unbiased,
+    Background, Fragment, FragmentError, Framebuffer, FramebufferError, HybridSpanFramebuffer, Layers, Paper, Row,
+    SpanBatcher, SpanFramebuffer, Unbiased,
 };
 
 /// The version of this C API. Additions (new functions, new status codes at the end) keep
@@ -223,12 +223,8 @@ pub struct MlabFramebuffer {
     width: u32,
     /// Private: height in lines.
     height: u32,
-    /// Private: an `MlabMethod`.
-    method: u32,
-    /// Private: `M` or `K`.
-    layers: u32,
-    /// Private: an `MlabArithmetic`.
-    arithmetic: u32,
+    /// Private: `layers - 1 + 8 * method + 16 * arithmetic`.
+    kind: u32,
     /// Private: set by a successful init.
     magic: u32,
 }
@@ -242,9 +238,7 @@ impl MlabFramebuffer {
         storage_rows: 0,
         width: 0,
         height: 0,
-        method: 0,
-        layers: 0,
-        arithmetic: 0,
+        kind: 0,
         magic: 0,
     };
 }
@@ -342,13 +336,35 @@ unsafe fn state<'s>(fb: *const MlabFramebuffer) -> Result<&'s MlabFramebuffer, M
     Ok(s)
 }
 
-/// `$body` with `$fb` bound to the kernel's `DynFramebuffer` over the rows of `$s` (an
-/// initialized `MlabFramebuffer`), in its arithmetic: the view is rebuilt for the call
-/// (a length check and one match) and dropped at its end.
-macro_rules! with_dyn {
-    ($s:expr, $fb:ident => $body:expr) => {{
+/// `$body` with `$fb` bound to the kernel's typed span grid over the rows of `$s` (an
+/// initialized [`MlabFramebuffer`]): `SpanFramebuffer<M, A>` or `HybridSpanFramebuffer<K, A>`,
+/// the grids that `DynFramebuffer` dispatches to, chosen by one `match` on the kind stored
+/// at init. The view is rebuilt for the call (`Grid::new`: a length check) and dropped at
+/// its end. Not `DynFramebuffer::new` itself: its 16-way choice of the variant from
+/// `Layers`, then its `match` per call, cost 140 instructions per per-pixel insert through
+/// this API where the typed grid costs about 40 (`docs/performance.md`, "C API").
+macro_rules! with_grid {
+    ($s:expr, $fb:ident => $body:expr) => {
+        with_grid!(@arms $s, $fb, $body;
+            0 SpanFramebuffer<'_, 1, Unbiased>, 1 SpanFramebuffer<'_, 2, Unbiased>,
+            2 SpanFramebuffer<'_, 3, Unbiased>, 3 SpanFramebuffer<'_, 4, Unbiased>,
+            4 SpanFramebuffer<'_, 5, Unbiased>, 5 SpanFramebuffer<'_, 6, Unbiased>,
+            6 SpanFramebuffer<'_, 7, Unbiased>, 7 SpanFramebuffer<'_, 8, Unbiased>,
+            8 HybridSpanFramebuffer<'_, 1, Unbiased>, 9 HybridSpanFramebuffer<'_, 2, Unbiased>,
+            10 HybridSpanFramebuffer<'_, 3, Unbiased>, 11 HybridSpanFramebuffer<'_, 4, Unbiased>,
+            12 HybridSpanFramebuffer<'_, 5, Unbiased>, 13 HybridSpanFramebuffer<'_, 6, Unbiased>,
+            14 HybridSpanFramebuffer<'_, 7, Unbiased>, 15 HybridSpanFramebuffer<'_, 8, Unbiased>,
+            16 SpanFramebuffer<'_, 1, Paper>, 17 SpanFramebuffer<'_, 2, Paper>,
+            18 SpanFramebuffer<'_, 3, Paper>, 19 SpanFramebuffer<'_, 4, Paper>,
+            20 SpanFramebuffer<'_, 5, Paper>, 21 SpanFramebuffer<'_, 6, Paper>,
+            22 SpanFramebuffer<'_, 7, Paper>, 23 SpanFramebuffer<'_, 8, Paper>,
+            24 HybridSpanFramebuffer<'_, 1, Paper>, 25 HybridSpanFramebuffer<'_, 2, Paper>,
+            26 HybridSpanFramebuffer<'_, 3, Paper>, 27 HybridSpanFramebuffer<'_, 4, Paper>,
+            28 HybridSpanFramebuffer<'_, 5, Paper>, 29 HybridSpanFramebuffer<'_, 6, Paper>,
+            30 HybridSpanFramebuffer<'_, 7, Paper>, 31 HybridSpanFramebuffer<'_, 8, Paper>)
+    };
+    (@arms $s:expr, $fb:ident, $body:expr; $($k:literal $t:ty),*) => {{
         let s: &MlabFramebuffer = $s;
-        let layers = layers_of(s.method, s.layers)?;
         // SAFETY: `storage` was checked non-null and 8-byte aligned by `mlab_framebuffer_init`
         // (or derived from such a pointer by `mlab_framebuffer_band`), and `storage_rows`
         // rows of it fit in isize::MAX bytes; the caller guarantees that these rows are
@@ -356,18 +372,13 @@ macro_rules! with_dyn {
         // `Row` (it is Pod), and `MlabRow` has its size and alignment (asserted above). The
         // slice lives only until this block ends.
         let rows = unsafe { core::slice::from_raw_parts_mut(s.storage.cast::<Row>(), s.storage_rows) };
-        match s.arithmetic {
-            MLAB_ARITHMETIC_UNBIASED => {
+        match s.kind {
+            $($k => {
                 #[allow(unused_mut)]
-                let mut $fb = DynFramebuffer::<Unbiased>::new(layers, rows, s.width, s.height)?;
+                let mut $fb = <$t>::new(rows, s.width, s.height)?;
                 $body
-            }
-            MLAB_ARITHMETIC_PAPER => {
-                #[allow(unused_mut)]
-                let mut $fb = DynFramebuffer::<Paper>::new(layers, rows, s.width, s.height)?;
-                $body
-            }
-            _ => Err(MlabStatus::InvalidArgument),
+            })*
+            _ => Err(MlabStatus::NotInitialized),
         }
     }};
 }
@@ -466,16 +477,6 @@ pub unsafe extern "C" fn mlab_framebuffer_init(
         check_ptr(fb, align_of::<MlabFramebuffer>())?;
         // SAFETY: non-null and aligned (checked); writable (the caller's guarantee).
         unsafe { fb.write(MlabFramebuffer::ZEROED) };
-        let state = MlabFramebuffer {
-            storage,
-            storage_rows,
-            width,
-            height,
-            method,
-            layers,
-            arithmetic,
-            magic: MAGIC,
-        };
         if arithmetic > MLAB_ARITHMETIC_PAPER {
             return Err(MlabStatus::InvalidArgument);
         }
@@ -484,7 +485,16 @@ pub unsafe extern "C" fn mlab_framebuffer_init(
         if storage_rows != expected {
             return Err(MlabStatus::StorageLength);
         }
-        with_dyn!(&state, f => {
+        let state = MlabFramebuffer {
+            storage,
+            storage_rows,
+            width,
+            height,
+            // In 0..32: method is 0 or 1, layers 1 to 8, arithmetic 0 or 1 (checked above).
+            kind: (layers - 1) | method << 3 | arithmetic << 4,
+            magic: MAGIC,
+        };
+        with_grid!(&state, f => {
             f.clear();
             Ok::<(), MlabStatus>(())
         })?;
@@ -523,7 +533,7 @@ pub unsafe extern "C" fn mlab_framebuffer_band(
             return Err(MlabStatus::OutOfBounds);
         }
         // Spans store lines one after the other: a band is a contiguous run of rows.
-        let line_rows = rows_needed(s.method, s.layers, s.width, 1)?;
+        let line_rows = rows_needed(s.kind >> 3 & 1, (s.kind & 7) + 1, s.width, 1)?;
         if line_rows.checked_mul(s.height as usize) != Some(s.storage_rows) {
             return Err(MlabStatus::NotInitialized);
         }
@@ -554,7 +564,7 @@ pub unsafe extern "C" fn mlab_framebuffer_clear(fb: *mut MlabFramebuffer) -> Mla
     guard(|| {
         // SAFETY: the caller's guarantee on `fb`.
         let s = unsafe { state(fb) }?;
-        with_dyn!(s, f => {
+        with_grid!(s, f => {
             f.clear();
             Ok(())
         })
@@ -576,7 +586,7 @@ unsafe fn insert_one(
         // SAFETY: the caller's guarantee on `fb`.
         let s = unsafe { state(fb) }?;
         let fragment = fragment?;
-        with_dyn!(s, f => Ok(f.insert(x, y, &fragment)?))
+        with_grid!(s, f => Ok(f.insert(x, y, &fragment)?))
     })
 }
 
@@ -652,7 +662,7 @@ unsafe fn insert_span(
             alpha: span.a,
             depth: span.depth,
         };
-        let invalid = with_dyn!(s, f => {
+        let invalid = with_grid!(s, f => {
             let r = if straight {
                 f.insert_span_straight(x, y, &lanes, mask)
             } else {
@@ -721,6 +731,32 @@ pub unsafe extern "C" fn mlab_insert_span_premultiplied(
     unsafe { insert_span(fb, x, y, fragments, mask, refused, false) }
 }
 
+/// `events` through a span batcher over `fb`, stopping at the first refused one: how many
+/// went in, and the status. A function of its own (not inlined into each arm of
+/// `with_grid!`), so that one batcher (about 44 KiB) is on the stack, not one per arm.
+#[inline(never)]
+fn batch_into<F: Framebuffer>(
+    fb: &mut F,
+    events: &[MlabPixelFragment],
+    straight: bool,
+) -> Result<(usize, Result<(), MlabStatus>), MlabStatus> {
+    let mut batch = SpanBatcher::new(fb);
+    for (i, e) in events.iter().enumerate() {
+        let one = if straight {
+            Fragment::straight_rgba(e.rgba, e.depth)
+        } else {
+            Fragment::premultiplied_rgba(e.rgba, e.depth)
+        };
+        let r = one.map_err(MlabStatus::from).and_then(|v| Ok(batch.insert(e.x, e.y, &v)?));
+        if let Err(st) = r {
+            batch.finish()?;
+            return Ok((i, Err(st)));
+        }
+    }
+    batch.finish()?;
+    Ok((events.len(), Ok(())))
+}
+
 /// A batch of fragments through the kernel's span batcher.
 ///
 /// # Safety
@@ -743,26 +779,7 @@ unsafe fn insert_batch(
         // SAFETY: non-null, aligned, at most isize::MAX bytes (checked); readable for
         // `count` fragments and not written during the call (the caller's guarantee).
         let events = unsafe { core::slice::from_raw_parts(fragments, count) };
-        let (done, status) = with_dyn!(s, f => {
-            let mut batch = SpanBatcher::new(&mut f);
-            let mut done = events.len();
-            let mut status = Ok(());
-            for (i, e) in events.iter().enumerate() {
-                let one = if straight {
-                    Fragment::straight_rgba(e.rgba, e.depth)
-                } else {
-                    Fragment::premultiplied_rgba(e.rgba, e.depth)
-                };
-                let r = one.map_err(MlabStatus::from).and_then(|v| Ok(batch.insert(e.x, e.y, &v)?));
-                if let Err(st) = r {
-                    done = i;
-                    status = Err(st);
-                    break;
-                }
-            }
-            batch.finish()?;
-            Ok::<_, MlabStatus>((done, status))
-        })?;
+        let (done, status) = with_grid!(s, f => batch_into(&mut f, events, straight))?;
         // SAFETY: non-null and aligned (checked), writable (the caller's guarantee).
         unsafe { inserted.write(done) };
         status
@@ -827,7 +844,7 @@ pub unsafe extern "C" fn mlab_resolve_rgba8(
         let bg = self::background(background)?;
         // SAFETY: the caller's guarantee on `out`; `[u8; 4]` takes any bits.
         let out = unsafe { output(s, out.cast::<[u8; 4]>(), out_pixels, 1) }?;
-        with_dyn!(s, f => Ok(f.resolve_rgba8(out, bg)?))
+        with_grid!(s, f => Ok(f.resolve_rgba8(out, bg)?))
     })
 }
 
@@ -851,7 +868,7 @@ pub unsafe extern "C" fn mlab_resolve_f32(
         // SAFETY: the caller's guarantee on `out`; a `Vec4` is four f32 (asserted above:
         // 16 bytes, alignment at most the 16 checked), any bits valid.
         let out = unsafe { output(s, out.cast::<Vec4>(), out_pixels, 16) }?;
-        with_dyn!(s, f => Ok(f.resolve_into(out, bg)?))
+        with_grid!(s, f => Ok(f.resolve_into(out, bg)?))
     })
 }
 
@@ -874,6 +891,6 @@ pub unsafe extern "C" fn mlab_resolve_rgba16f(
         let bg = self::background(background)?;
         // SAFETY: the caller's guarantee on `out`; `f16` is a transparent u16 (any bits).
         let out = unsafe { output(s, out.cast::<[f16; 4]>(), out_pixels, 2) }?;
-        with_dyn!(s, f => Ok(f.resolve_rgba16f(out, bg)?))
+        with_grid!(s, f => Ok(f.resolve_rgba16f(out, bg)?))
     })
 }
