@@ -88,7 +88,10 @@ fn bench(c: &mut Criterion) {
 
         let mut rows = 0;
         // SAFETY: a size_t to write.
-        assert_eq!(unsafe { mlab_rows_needed(method, layers, w, h, &mut rows) }, MlabStatus::Ok);
+        assert_eq!(
+            unsafe { mlab_rows_needed(method, layers, w, h, &mut rows) },
+            MlabStatus::Ok
+        );
         let mut c_storage = vec![MlabRow { bytes: [0; 8] }; rows];
         let mut c_fb = std::mem::MaybeUninit::<MlabFramebuffer>::uninit();
         // SAFETY: `c_storage` holds `rows` rows and outlives every use of `c_fb`.

@@ -15,9 +15,10 @@
 //! forget, nothing to leak, and the state can live wherever the caller's other state lives.
 //! It is a plain view: copying it is allowed (the copies are views of the same rows).
 //!
-//! Every call rebuilds the kernel's borrowed view (`DynFramebuffer<'_, A>` over
-//! `&mut [Row]`) from the pointer and length for the duration of the call, and drops it
-//! before returning: no Rust reference outlives a call, so the only lifetime rule is the C
+//! Every call rebuilds the kernel's borrowed view (the span grid that `DynFramebuffer` would
+//! hold, `SpanFramebuffer<M, A>` or `HybridSpanFramebuffer<K, A>` over `&mut [Row]`) from the
+//! pointer and length for the duration of the call, and drops it before returning: no Rust
+//! reference outlives a call, so the only lifetime rule is the C
 //! one (the rows stay valid, and are not used by anything else during a call). What that
 //! rebuild costs per insert is measured in `docs/performance.md` ("C API").
 //!
@@ -340,9 +341,10 @@ unsafe fn state<'s>(fb: *const MlabFramebuffer) -> Result<&'s MlabFramebuffer, M
 /// initialized [`MlabFramebuffer`]): `SpanFramebuffer<M, A>` or `HybridSpanFramebuffer<K, A>`,
 /// the grids that `DynFramebuffer` dispatches to, chosen by one `match` on the kind stored
 /// at init. The view is rebuilt for the call (`Grid::new`: a length check) and dropped at
-/// its end. Not `DynFramebuffer::new` itself: its 16-way choice of the variant from
-/// `Layers`, then its `match` per call, cost 140 instructions per per-pixel insert through
-/// this API where the typed grid costs about 40 (`docs/performance.md`, "C API").
+/// its end. Not `DynFramebuffer::new` itself: with its choice of the variant from `Layers`
+/// (16 comparisons) and then its `match`, a per-pixel insert through this API ran 373
+/// instructions, against 313 with the typed grid and 233 for the Rust loop over
+/// `DynFramebuffer::insert` (MLAB 4, callgrind; `docs/performance.md`, "C API").
 macro_rules! with_grid {
     ($s:expr, $fb:ident => $body:expr) => {
         with_grid!(@arms $s, $fb, $body;
@@ -390,7 +392,12 @@ macro_rules! with_grid {
 /// `out`, if non-null, is valid for writes of `pixels` elements of `T` for `'o`, and used by
 /// nothing else meanwhile; any bit pattern is a valid `T`.
 #[inline(always)]
-unsafe fn output<'o, T>(s: &MlabFramebuffer, out: *mut T, pixels: usize, align: usize) -> Result<&'o mut [T], MlabStatus> {
+unsafe fn output<'o, T>(
+    s: &MlabFramebuffer,
+    out: *mut T,
+    pixels: usize,
+    align: usize,
+) -> Result<&'o mut [T], MlabStatus> {
     check_ptr(out, align)?;
     if pixels as u64 != s.width as u64 * s.height as u64 {
         return Err(MlabStatus::OutputLength);
@@ -747,7 +754,9 @@ fn batch_into<F: Framebuffer>(
         } else {
             Fragment::premultiplied_rgba(e.rgba, e.depth)
         };
-        let r = one.map_err(MlabStatus::from).and_then(|v| Ok(batch.insert(e.x, e.y, &v)?));
+        let r = one
+            .map_err(MlabStatus::from)
+            .and_then(|v| Ok(batch.insert(e.x, e.y, &v)?));
         if let Err(st) = r {
             batch.finish()?;
             return Ok((i, Err(st)));

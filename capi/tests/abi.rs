@@ -67,7 +67,10 @@ struct CFb {
 fn c_fb(method: MlabMethod, layers: u32, arith: MlabArithmetic, w: u32, h: u32) -> CFb {
     let mut rows = 0usize;
     // SAFETY: a valid `size_t` to write.
-    assert_eq!(unsafe { mlab_rows_needed(method, layers, w, h, &mut rows) }, MlabStatus::Ok);
+    assert_eq!(
+        unsafe { mlab_rows_needed(method, layers, w, h, &mut rows) },
+        MlabStatus::Ok
+    );
     // Garbage in the storage: init must clear it.
     let mut storage = vec![MlabRow { bytes: [0xa5; 8] }; rows];
     let mut fb = std::mem::MaybeUninit::<MlabFramebuffer>::uninit();
@@ -93,7 +96,10 @@ fn same<T: PartialEq + std::fmt::Debug>(got: &[T], want: &[T], what: &str) {
     assert_eq!(got.len(), want.len(), "{what}: lengths");
     if let Some(i) = got.iter().zip(want).position(|(a, b)| a != b) {
         let n = got.iter().zip(want).filter(|(a, b)| a != b).count();
-        panic!("{what}: {n} elements differ, the first at {i}: {:?} against {:?}", got[i], want[i]);
+        panic!(
+            "{what}: {n} elements differ, the first at {i}: {:?} against {:?}",
+            got[i], want[i]
+        );
     }
 }
 
@@ -139,7 +145,11 @@ fn check_resolves<A: Arithmetic>(c: &CFb, r: &DynFramebuffer<'_, A>, what: &str)
         // SAFETY: `n` pixels of 4 floats, 16-byte aligned.
         let st = unsafe { mlab_resolve_f32(&c.fb, cbg, got.as_mut_ptr().cast(), n) };
         assert_eq!(st, MlabStatus::Ok);
-        let bits = |v: &[Vec4]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+        let bits = |v: &[Vec4]| {
+            v.iter()
+                .flat_map(|p| p.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
         same(&bits(&got), &bits(&want), &format!("{what}: f32 over {rbg:?}"));
 
         let mut want16 = vec![[f16::ZERO; 4]; n];
@@ -195,12 +205,17 @@ fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArith
         };
         let want = match f {
             Err(err) => MlabStatus::from(err),
-            Ok(f) => r.insert(e.x, e.y, &f).map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
+            Ok(f) => r
+                .insert(e.x, e.y, &f)
+                .map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
         };
         assert_eq!(got, want, "{what}: fragment {i} {e:?}");
         errors += (got != MlabStatus::Ok) as usize;
     }
-    assert!(errors > 20 && errors < 300, "{what}: the stream has some bad fragments ({errors})");
+    assert!(
+        errors > 20 && errors < 300,
+        "{what}: the stream has some bad fragments ({errors})"
+    );
     same(&c.bytes(), &rust_bytes(&r), &format!("{what}: per-pixel inserts"));
     check_resolves(&c, &r, &what);
 
@@ -266,7 +281,6 @@ fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArith
     }
     same(&c.bytes(), &rust_bytes(&r), &format!("{what}: span inserts"));
     check_resolves(&c, &r, &what);
-    drop(r);
 
     // The batch, resumed after each refused fragment, equals per-pixel inserts skipping them.
     for straight in [true, false] {
@@ -282,7 +296,9 @@ fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArith
             };
             let st = match f {
                 Err(err) => MlabStatus::from(err),
-                Ok(f) => r.insert(e.x, e.y, &f).map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
+                Ok(f) => r
+                    .insert(e.x, e.y, &f)
+                    .map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
             };
             if st != MlabStatus::Ok {
                 want_stops.push((i, st));
@@ -309,7 +325,11 @@ fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArith
             start += inserted + 1;
         }
         assert_eq!(got_stops, want_stops, "{what}: batch stops (straight {straight})");
-        same(&c.bytes(), &rust_bytes(&r), &format!("{what}: batch (straight {straight})"));
+        same(
+            &c.bytes(),
+            &rust_bytes(&r),
+            &format!("{what}: batch (straight {straight})"),
+        );
         check_resolves(&c, &r, &what);
     }
 }
@@ -350,7 +370,10 @@ fn bands_on_threads_equal_the_whole_framebuffer() {
         // SAFETY: initialized framebuffer; the bands are written to structs of their own.
         unsafe {
             assert_eq!(mlab_framebuffer_band(&banded.fb, 0, split, &mut top.0), MlabStatus::Ok);
-            assert_eq!(mlab_framebuffer_band(&banded.fb, split, H - split, &mut bottom.0), MlabStatus::Ok);
+            assert_eq!(
+                mlab_framebuffer_band(&banded.fb, split, H - split, &mut bottom.0),
+                MlabStatus::Ok
+            );
         }
         std::thread::scope(|s| {
             for (band, first, lines) in [(top, 0, split), (bottom, split, H - split)] {
@@ -360,8 +383,7 @@ fn bands_on_threads_equal_the_whole_framebuffer() {
                     for e in events.iter().filter(|e| (first..first + lines).contains(&e.y)) {
                         let [r, g, b, a] = e.rgba;
                         // SAFETY: the band's rows are this thread's alone.
-                        let st =
-                            unsafe { mlab_insert_straight(&mut band.0, e.x, e.y - first, r, g, b, a, e.depth) };
+                        let st = unsafe { mlab_insert_straight(&mut band.0, e.x, e.y - first, r, g, b, a, e.depth) };
                         assert_eq!(st, MlabStatus::Ok);
                     }
                     // A line past the band is refused.

@@ -18,7 +18,10 @@ struct CFb {
 fn c_fb(method: MlabMethod, layers: u32) -> CFb {
     let mut rows = 0;
     // SAFETY: a size_t to write.
-    assert_eq!(unsafe { mlab_rows_needed(method, layers, W, H, &mut rows) }, MlabStatus::Ok);
+    assert_eq!(
+        unsafe { mlab_rows_needed(method, layers, W, H, &mut rows) },
+        MlabStatus::Ok
+    );
     let mut storage = vec![MlabRow { bytes: [0; 8] }; rows];
     let mut fb = MaybeUninit::uninit();
     // SAFETY: the storage lives in the returned value with the struct.
@@ -129,7 +132,10 @@ fn null_misaligned_and_uninitialized_framebuffers() {
 
 fn every_call_returns_ok(fb: *mut MlabFramebuffer) {
     // SAFETY: an initialized framebuffer.
-    assert_eq!(unsafe { mlab_insert_straight(fb, 1, 1, 0.5, 0.5, 0.5, 0.5, 1.0) }, MlabStatus::Ok);
+    assert_eq!(
+        unsafe { mlab_insert_straight(fb, 1, 1, 0.5, 0.5, 0.5, 0.5, 1.0) },
+        MlabStatus::Ok
+    );
 }
 
 #[test]
@@ -155,7 +161,10 @@ fn rows_needed_refuses_bad_sizes() {
         );
         let mut buf = [0u64; 2];
         let misaligned = buf.as_mut_ptr().cast::<u8>().wrapping_add(4).cast::<usize>();
-        assert_eq!(mlab_rows_needed(MLAB_METHOD_MLAB, 4, 8, 8, misaligned), MlabStatus::Misaligned);
+        assert_eq!(
+            mlab_rows_needed(MLAB_METHOD_MLAB, 4, 8, 8, misaligned),
+            MlabStatus::Misaligned
+        );
     }
 }
 
@@ -187,7 +196,11 @@ fn init_refuses_bad_storage_and_arguments() {
     assert_eq!(init(f, 0, 0, 0, p, rows, W, H), MlabStatus::UnsupportedLayers);
     assert_eq!(init(f, 0, 9, 0, p, rows, W, H), MlabStatus::UnsupportedLayers);
     assert_eq!(init(f, 7, 4, 0, p, rows, W, H), MlabStatus::InvalidArgument, "method");
-    assert_eq!(init(f, 0, 4, 2, p, rows, W, H), MlabStatus::InvalidArgument, "arithmetic");
+    assert_eq!(
+        init(f, 0, 4, 2, p, rows, W, H),
+        MlabStatus::InvalidArgument,
+        "arithmetic"
+    );
     assert!(storage.iter().all(|r| r.bytes == [7; 8]), "storage untouched on error");
     assert_eq!(init(f, 0, 4, 1, p, rows, W, H), MlabStatus::Ok);
     assert!(storage[..rows].iter().all(|r| r.bytes != [7; 8]), "init clears");
@@ -309,16 +322,38 @@ fn span_and_batch_pointers_are_checked() {
     };
     let mut buf = [0u32; 64];
     let off_span = buf.as_mut_ptr().cast::<u8>().wrapping_add(2).cast::<MlabFragmentSpan>();
-    let off_frag = buf.as_mut_ptr().cast::<u8>().wrapping_add(2).cast::<MlabPixelFragment>();
+    let off_frag = buf
+        .as_mut_ptr()
+        .cast::<u8>()
+        .wrapping_add(2)
+        .cast::<MlabPixelFragment>();
     // SAFETY: an initialized framebuffer; every pointer is null, misaligned (refused) or valid.
     unsafe {
         let fb = &mut c.fb as *mut MlabFramebuffer;
-        assert_eq!(mlab_insert_span_straight(fb, 0, 0, null(), 1, &mut refused), MlabStatus::NullPointer);
-        assert_eq!(mlab_insert_span_premultiplied(fb, 0, 0, &SPAN, 1, null_mut()), MlabStatus::NullPointer);
-        assert_eq!(mlab_insert_span_straight(fb, 0, 0, off_span, 1, &mut refused), MlabStatus::Misaligned);
-        assert_eq!(mlab_insert_batch_straight(fb, null(), 0, &mut inserted), MlabStatus::NullPointer);
-        assert_eq!(mlab_insert_batch_premultiplied(fb, &frag, 1, null_mut()), MlabStatus::NullPointer);
-        assert_eq!(mlab_insert_batch_straight(fb, off_frag, 1, &mut inserted), MlabStatus::Misaligned);
+        assert_eq!(
+            mlab_insert_span_straight(fb, 0, 0, null(), 1, &mut refused),
+            MlabStatus::NullPointer
+        );
+        assert_eq!(
+            mlab_insert_span_premultiplied(fb, 0, 0, &SPAN, 1, null_mut()),
+            MlabStatus::NullPointer
+        );
+        assert_eq!(
+            mlab_insert_span_straight(fb, 0, 0, off_span, 1, &mut refused),
+            MlabStatus::Misaligned
+        );
+        assert_eq!(
+            mlab_insert_batch_straight(fb, null(), 0, &mut inserted),
+            MlabStatus::NullPointer
+        );
+        assert_eq!(
+            mlab_insert_batch_premultiplied(fb, &frag, 1, null_mut()),
+            MlabStatus::NullPointer
+        );
+        assert_eq!(
+            mlab_insert_batch_straight(fb, off_frag, 1, &mut inserted),
+            MlabStatus::Misaligned
+        );
         assert_eq!(
             mlab_insert_batch_straight(fb, &frag, usize::MAX / 2, &mut inserted),
             MlabStatus::SizeOverflow
@@ -342,15 +377,30 @@ fn resolves_refuse_bad_outputs() {
     // SAFETY: outputs valid for n + 1 pixels (or null / misaligned: refused).
     unsafe {
         for len in [0, n - 1, n + 1] {
-            assert_eq!(mlab_resolve_rgba8(fb, OPAQUE, p8, len), MlabStatus::OutputLength, "{len}");
-            assert_eq!(mlab_resolve_f32(fb, OPAQUE, p32, len), MlabStatus::OutputLength, "{len}");
-            assert_eq!(mlab_resolve_rgba16f(fb, OPAQUE, p16, len), MlabStatus::OutputLength, "{len}");
+            assert_eq!(
+                mlab_resolve_rgba8(fb, OPAQUE, p8, len),
+                MlabStatus::OutputLength,
+                "{len}"
+            );
+            assert_eq!(
+                mlab_resolve_f32(fb, OPAQUE, p32, len),
+                MlabStatus::OutputLength,
+                "{len}"
+            );
+            assert_eq!(
+                mlab_resolve_rgba16f(fb, OPAQUE, p16, len),
+                MlabStatus::OutputLength,
+                "{len}"
+            );
         }
         assert_eq!(mlab_resolve_rgba8(fb, OPAQUE, null_mut(), n), MlabStatus::NullPointer);
         assert_eq!(mlab_resolve_f32(fb, OPAQUE, null_mut(), n), MlabStatus::NullPointer);
         assert_eq!(mlab_resolve_rgba16f(fb, OPAQUE, null_mut(), n), MlabStatus::NullPointer);
         // f32 output: 16-byte alignment; RGBA16F: 2.
-        assert_eq!(mlab_resolve_f32(fb, OPAQUE, p32.wrapping_add(1), n), MlabStatus::Misaligned);
+        assert_eq!(
+            mlab_resolve_f32(fb, OPAQUE, p32.wrapping_add(1), n),
+            MlabStatus::Misaligned
+        );
         let p16_odd = p16.cast::<u8>().wrapping_add(1).cast::<u16>();
         assert_eq!(mlab_resolve_rgba16f(fb, OPAQUE, p16_odd, n), MlabStatus::Misaligned);
         assert_eq!(mlab_resolve_rgba8(fb, bad_bg, p8, n), MlabStatus::InvalidArgument);
@@ -374,15 +424,24 @@ fn bands_refuse_bad_lines() {
     let mut band = MaybeUninit::uninit();
     // SAFETY: an initialized framebuffer; `band` writable (or null: refused).
     unsafe {
-        assert_eq!(mlab_framebuffer_band(&c.fb, 0, 0, band.as_mut_ptr()), MlabStatus::ZeroSize);
-        assert_eq!(mlab_framebuffer_band(&c.fb, 1, H, band.as_mut_ptr()), MlabStatus::OutOfBounds);
+        assert_eq!(
+            mlab_framebuffer_band(&c.fb, 0, 0, band.as_mut_ptr()),
+            MlabStatus::ZeroSize
+        );
+        assert_eq!(
+            mlab_framebuffer_band(&c.fb, 1, H, band.as_mut_ptr()),
+            MlabStatus::OutOfBounds
+        );
         assert_eq!(
             mlab_framebuffer_band(&c.fb, u32::MAX, 2, band.as_mut_ptr()),
             MlabStatus::OutOfBounds
         );
         every_call_returns(band.as_mut_ptr(), MlabStatus::NotInitialized, "failed band");
         assert_eq!(mlab_framebuffer_band(&c.fb, 0, 1, null_mut()), MlabStatus::NullPointer);
-        assert_eq!(mlab_framebuffer_band(&c.fb, 1, H - 1, band.as_mut_ptr()), MlabStatus::Ok);
+        assert_eq!(
+            mlab_framebuffer_band(&c.fb, 1, H - 1, band.as_mut_ptr()),
+            MlabStatus::Ok
+        );
         every_call_returns_ok(band.as_mut_ptr());
     }
 }

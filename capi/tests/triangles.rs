@@ -93,10 +93,22 @@ fn c_image(method: MlabMethod, layers: u32, arith: MlabArithmetic) -> Vec<[u8; 4
     let mut out = vec![[0; 4]; (WIDTH * HEIGHT) as usize];
     // SAFETY: every pointer is valid for what it is passed with; the storage outlives `fb`.
     unsafe {
-        assert_eq!(mlab_rows_needed(method, layers, WIDTH, HEIGHT, &mut rows), MlabStatus::Ok);
+        assert_eq!(
+            mlab_rows_needed(method, layers, WIDTH, HEIGHT, &mut rows),
+            MlabStatus::Ok
+        );
         let mut storage = vec![MlabRow { bytes: [0; 8] }; rows];
         let mut fb = std::mem::MaybeUninit::uninit();
-        let st = mlab_framebuffer_init(fb.as_mut_ptr(), method, layers, arith, storage.as_mut_ptr(), rows, WIDTH, HEIGHT);
+        let st = mlab_framebuffer_init(
+            fb.as_mut_ptr(),
+            method,
+            layers,
+            arith,
+            storage.as_mut_ptr(),
+            rows,
+            WIDTH,
+            HEIGHT,
+        );
         assert_eq!(st, MlabStatus::Ok);
         let fb = fb.as_mut_ptr();
         for (x, y, [r, g, b, a], depth) in fragments() {
@@ -147,7 +159,10 @@ fn the_c_example_scene_through_the_rust_api_and_the_c_abi() {
     let header = format!("P6\n{WIDTH} {HEIGHT}\n255\n").len();
     let pixels = &images[0][header..];
     let white = pixels.chunks(3).filter(|p| *p == [255; 3]).count();
-    assert!(white < (WIDTH * HEIGHT / 3) as usize, "mostly covered: {white} white pixels");
+    assert!(
+        white < (WIDTH * HEIGHT / 3) as usize,
+        "mostly covered: {white} white pixels"
+    );
     let mut distinct = images.clone();
     distinct.sort();
     distinct.dedup();
