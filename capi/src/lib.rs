@@ -27,9 +27,11 @@
 //! Checked on every call, each with its own `MlabStatus`: null pointers, pointers not
 //! aligned for their type, a framebuffer struct that was not initialized (its magic word),
 //! enum values out of range, sizes (zero, overflow, storage and output lengths), pixels
-//! outside the framebuffer, invalid fragments (NaN, infinities, ranges). A panic inside
-//! (none is expected: the kernel returns errors) is caught and returned as
-//! `MlabStatus::Internal`; nothing unwinds into C.
+//! outside the framebuffer, invalid fragments (NaN, infinities, ranges). Nothing unwinds into
+//! C. A panic (none is expected: the kernel returns errors, on every input) is caught and
+//! returned as `MlabStatus::Internal` by every function but the two per-pixel inserts; in
+//! those, where the cost per fragment is the point, it aborts the process, as Rust does for
+//! any panic that reaches an `extern "C"` function.
 //!
 //! Not checkable, so guaranteed by the caller: every non-null pointer points to memory that
 //! is valid for the length passed (`storage_rows` rows, `out_pixels` pixels, `count`
@@ -43,12 +45,13 @@
 use core::ffi::{c_char, c_int};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+use mlab::framebuffer::{Ht, Mlab, Pixel};
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::lanes::FragmentLanes;
 use mlab::{
-    Background, Fragment, FragmentError, Framebuffer, FramebufferError, HybridSpanFramebuffer, Layers, Paper, Row,
-    SpanBatcher, SpanFramebuffer, Unbiased,
+    Background, Fragment, FragmentError, Framebuffer, FramebufferError, Grid, HybridSpanFramebuffer, Layers, Paper,
+    Row, SpanBatcher, SpanFramebuffer, Spans, Unbiased,
 };
 
 /// The version of this C API. Additions (new functions, new status codes at the end) keep
@@ -105,7 +108,8 @@ pub enum MlabStatus {
     /// A fragment's depth is infinite.
     InfiniteDepth = 18,
     /// A bug in mlab: a panic was caught at the boundary (the framebuffer's contents are
-    /// unspecified: clear it), or an internal inconsistency.
+    /// unspecified: clear it), or an internal inconsistency. (A panic in a per-pixel insert
+    /// aborts the process instead; see `docs/c.md`.)
     Internal = 19,
 }
 
@@ -343,8 +347,9 @@ unsafe fn state<'s>(fb: *const MlabFramebuffer) -> Result<&'s MlabFramebuffer, M
 /// at init. The view is rebuilt for the call (`Grid::new`: a length check) and dropped at
 /// its end. Not `DynFramebuffer::new` itself: with its choice of the variant from `Layers`
 /// (16 comparisons) and then its `match`, a per-pixel insert through this API ran 373
-/// instructions, against 313 with the typed grid and 233 for the Rust loop over
-/// `DynFramebuffer::insert` (MLAB 4, callgrind; `docs/performance.md`, "C API").
+/// instructions, against 313 with this macro and 233 for the Rust loop over
+/// `DynFramebuffer::insert` (MLAB 4, callgrind; `docs/performance.md`, "C API"). The
+/// per-pixel inserts go further (`insert_one`).
 macro_rules! with_grid {
     ($s:expr, $fb:ident => $body:expr) => {
         with_grid!(@arms $s, $fb, $body;
@@ -578,23 +583,118 @@ pub unsafe extern "C" fn mlab_framebuffer_clear(fb: *mut MlabFramebuffer) -> Mla
     })
 }
 
-/// One fragment into the pixel, validated by `make` (straight or premultiplied).
+/// One fragment into the pixel of a typed grid: straight or premultiplied color (`S`),
+/// validated, then inserted.
+///
+/// The per-pixel inserts are the one place where the cost of the boundary is paid per
+/// fragment, so they are written for it (MLAB 4, callgrind, against 233 instructions per
+/// fragment for the Rust loop over `DynFramebuffer::insert`): the exported function checks
+/// the state and calls the typed insert of its kind through a table (`insert_one`), with
+/// the color as scalars in registers all the way, 277 instructions. Through `guard` and
+/// `with_grid!` (a closure called by `catch_unwind`, the fragment validated outside it and
+/// read back through memory, and 32 inlined inserts in one function) it ran 313; the same
+/// with the table but still inside `guard`, 307.
+type InsertTyped = fn(&MlabFramebuffer, u32, u32, f32, f32, f32, f32, f32) -> MlabStatus;
+
+#[allow(clippy::too_many_arguments)]
+fn insert_typed<P: Pixel, const S: bool>(
+    s: &MlabFramebuffer,
+    x: u32,
+    y: u32,
+    r: f32,
+    g: f32,
+    b: f32,
+    a: f32,
+    depth: f32,
+) -> MlabStatus {
+    let fragment = if S {
+        Fragment::straight_rgba([r, g, b, a], depth)
+    } else {
+        Fragment::premultiplied_rgba([r, g, b, a], depth)
+    };
+    let fragment = match fragment {
+        Ok(f) => f,
+        Err(e) => return e.into(),
+    };
+    // SAFETY: as in `with_grid!`.
+    let rows = unsafe { core::slice::from_raw_parts_mut(s.storage.cast::<Row>(), s.storage_rows) };
+    let r = Grid::<P, Spans>::new(rows, s.width, s.height).and_then(|mut g| g.insert(x, y, &fragment));
+    match r {
+        Ok(()) => MlabStatus::Ok,
+        Err(e) => e.into(),
+    }
+}
+
+macro_rules! insert_table {
+    ($s:literal) => {
+        [
+            insert_typed::<Mlab<1, Unbiased>, $s>,
+            insert_typed::<Mlab<2, Unbiased>, $s>,
+            insert_typed::<Mlab<3, Unbiased>, $s>,
+            insert_typed::<Mlab<4, Unbiased>, $s>,
+            insert_typed::<Mlab<5, Unbiased>, $s>,
+            insert_typed::<Mlab<6, Unbiased>, $s>,
+            insert_typed::<Mlab<7, Unbiased>, $s>,
+            insert_typed::<Mlab<8, Unbiased>, $s>,
+            insert_typed::<Ht<1, Unbiased>, $s>,
+            insert_typed::<Ht<2, Unbiased>, $s>,
+            insert_typed::<Ht<3, Unbiased>, $s>,
+            insert_typed::<Ht<4, Unbiased>, $s>,
+            insert_typed::<Ht<5, Unbiased>, $s>,
+            insert_typed::<Ht<6, Unbiased>, $s>,
+            insert_typed::<Ht<7, Unbiased>, $s>,
+            insert_typed::<Ht<8, Unbiased>, $s>,
+            insert_typed::<Mlab<1, Paper>, $s>,
+            insert_typed::<Mlab<2, Paper>, $s>,
+            insert_typed::<Mlab<3, Paper>, $s>,
+            insert_typed::<Mlab<4, Paper>, $s>,
+            insert_typed::<Mlab<5, Paper>, $s>,
+            insert_typed::<Mlab<6, Paper>, $s>,
+            insert_typed::<Mlab<7, Paper>, $s>,
+            insert_typed::<Mlab<8, Paper>, $s>,
+            insert_typed::<Ht<1, Paper>, $s>,
+            insert_typed::<Ht<2, Paper>, $s>,
+            insert_typed::<Ht<3, Paper>, $s>,
+            insert_typed::<Ht<4, Paper>, $s>,
+            insert_typed::<Ht<5, Paper>, $s>,
+            insert_typed::<Ht<6, Paper>, $s>,
+            insert_typed::<Ht<7, Paper>, $s>,
+            insert_typed::<Ht<8, Paper>, $s>,
+        ]
+    };
+}
+
+/// The per-pixel inserts by kind (the index `with_grid!` matches on), straight color.
+static INSERT_STRAIGHT: [InsertTyped; 32] = insert_table!(true);
+/// The per-pixel inserts by kind, premultiplied color.
+static INSERT_PREMULTIPLIED: [InsertTyped; 32] = insert_table!(false);
+
+/// A per-pixel insert: the state checked, then a tail call of the typed insert of its kind.
 ///
 /// # Safety
 /// As `mlab_insert_straight`.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 unsafe fn insert_one(
+    table: &[InsertTyped; 32],
     fb: *mut MlabFramebuffer,
     x: u32,
     y: u32,
-    fragment: Result<Fragment, FragmentError>,
+    r: f32,
+    g: f32,
+    b: f32,
+    a: f32,
+    depth: f32,
 ) -> MlabStatus {
-    guard(|| {
-        // SAFETY: the caller's guarantee on `fb`.
-        let s = unsafe { state(fb) }?;
-        let fragment = fragment?;
-        with_grid!(s, f => Ok(f.insert(x, y, &fragment)?))
-    })
+    // SAFETY: the caller's guarantee on `fb`.
+    let s = match unsafe { state(fb) } {
+        Ok(s) => s,
+        Err(e) => return e,
+    };
+    match table.get(s.kind as usize) {
+        Some(insert) => insert(s, x, y, r, g, b, a, depth),
+        None => MlabStatus::NotInitialized,
+    }
 }
 
 /// Inserts one fragment of **straight** (not premultiplied) linear color `r, g, b`, alpha `a`
@@ -620,7 +720,7 @@ pub unsafe extern "C" fn mlab_insert_straight(
     depth: f32,
 ) -> MlabStatus {
     // SAFETY: the caller's guarantee, passed on.
-    unsafe { insert_one(fb, x, y, Fragment::straight_rgba([r, g, b, a], depth)) }
+    unsafe { insert_one(&INSERT_STRAIGHT, fb, x, y, r, g, b, a, depth) }
 }
 
 /// `mlab_insert_straight` with **premultiplied** color (`r, g, b` already multiplied by
@@ -641,7 +741,7 @@ pub unsafe extern "C" fn mlab_insert_premultiplied(
     depth: f32,
 ) -> MlabStatus {
     // SAFETY: the caller's guarantee, passed on.
-    unsafe { insert_one(fb, x, y, Fragment::premultiplied_rgba([r, g, b, a], depth)) }
+    unsafe { insert_one(&INSERT_PREMULTIPLIED, fb, x, y, r, g, b, a, depth) }
 }
 
 /// A span insert of fragments (straight color or not).
