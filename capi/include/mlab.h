@@ -136,7 +136,8 @@ typedef enum MlabStatus {
   MLAB_STATUS_INFINITE_DEPTH = 18,
   /**
    * A bug in mlab: a panic was caught at the boundary (the framebuffer's contents are
-   * unspecified: clear it), or an internal inconsistency.
+   * unspecified: clear it), or an internal inconsistency. (A panic in a per-pixel insert
+   * aborts the process instead; see `docs/c.md`.)
    */
   MLAB_STATUS_INTERNAL = 19,
 } MlabStatus;
