@@ -13,11 +13,11 @@ out="$PWD/target/capi-ci" # absolute: cargo test runs in capi/
 rm -rf "$out"
 mkdir -p "$out/c" "$out/rust"
 cargo build --release -p mlab-capi
-# The libraries that `rustc --print native-static-libs` lists for the static library on
-# Linux (docs/c.md).
 # The header alone, as C99 and as C++11 (docs/c.md says both compile warning-free).
 "${CC:-cc}" -std=c99 -Wall -Wextra -Werror -pedantic -fsyntax-only -x c capi/include/mlab.h
 "${CXX:-c++}" -std=c++11 -Wall -Wextra -Werror -pedantic -fsyntax-only -x c++ capi/include/mlab.h
+# The libraries that `rustc --print native-static-libs` lists for the static library on
+# Linux (docs/c.md).
 LIBS=(target/release/libmlab_capi.a -lgcc_s -lutil -lrt -lpthread -lm -ldl)
 CFLAGS=(-std=c11 -Wall -Wextra -Werror -pedantic -O1 -g -Icapi/include)
 "${CC:-cc}" "${CFLAGS[@]}" -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=all \
