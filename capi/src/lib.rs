@@ -6,7 +6,7 @@
 //!
 //! # The state: a caller-allocated struct over caller-owned storage
 //!
-//! `MlabFramebuffer` is a small `#[repr(C)]` struct (40 bytes on 64-bit targets) that the
+//! `MlabFramebuffer` is a small `#[repr(C)]` struct (32 bytes on 64-bit targets) that the
 //! caller declares (on the stack, inside its own renderer struct) and
 //! `mlab_framebuffer_init` fills: a pointer to the storage, its length in rows, the size,
 //! the method and the arithmetic. It owns nothing; the rows are the caller's
@@ -233,6 +233,9 @@ pub struct MlabFramebuffer {
     /// Private: set by a successful init.
     magic: u32,
 }
+
+#[cfg(target_pointer_width = "64")]
+const _: () = assert!(size_of::<MlabFramebuffer>() == 32 && align_of::<MlabFramebuffer>() == 8);
 
 /// The word that marks an initialized `MlabFramebuffer` ("MLAB").
 const MAGIC: u32 = 0x4d4c_4142;
