@@ -250,3 +250,70 @@ fn hybrid_new_over_empty_rows_needs_clearing() {
     let fb = HybridFramebuffer::<1>::new_cleared(&mut s, 1, 1).unwrap();
     assert_eq!(fb.resolve(0, 0).unwrap(), mlab::Resolved::CLEAR);
 }
+
+/// A band rebuilt from its own rows with `Grid::with_first_pixel` (as the C API's
+/// `mlab_framebuffer_band` does) inserts the bytes of the band `split_lines` gives, and of the
+/// whole framebuffer: keyed and content-keyed faint fragments (dithered), per pixel and in
+/// spans, MLAB and HT, both layouts; without the first pixel id the dithers differ.
+#[test]
+fn a_band_rebuilt_with_its_first_pixel_inserts_the_whole_framebuffers_bytes() {
+    fn check<P: Pixel, L: mlab::framebuffer::Arrangement>() {
+        let (w, h, split) = (13u32, 5u32, 3u32);
+        let frags: Vec<(u32, u32, mlab::Fragment)> = (0..400u32)
+            .map(|i| {
+                let a = 0.01 + (i % 7) as f32 * 0.003;
+                let f = mlab::Fragment::straight(Vec3::new(0.9, 0.5, 0.2), a, 1.0 + (i % 11) as f32).unwrap();
+                let f = if i % 3 == 0 { f } else { f.with_key(i / 4) };
+                (i * 7 % w, i * 3 % h, f)
+            })
+            .collect();
+        let lanes = FragmentLanes {
+            color: [[0.3; 8], [0.2; 8], [0.1; 8]],
+            alpha: [0.02, 0.03, 0.01, 0.02, 0.015, 0.025, 0.01, 0.03],
+            depth: [0.5; 8],
+            key: Some([1, 2, 3, 4, 5, 6, 7, 8]),
+        };
+        let rows = Grid::<P, L>::rows_needed(w, h).unwrap();
+        let (mut whole, mut split_rows, mut rebuilt) =
+            (vec![Row::EMPTY; rows], vec![Row::EMPTY; rows], vec![Row::EMPTY; rows]);
+        let mut fb = Grid::<P, L>::new_cleared(&mut whole, w, h).unwrap();
+        let (mut top, mut bottom) = Grid::<P, L>::new_cleared(&mut split_rows, w, h)
+            .unwrap()
+            .split_lines(split);
+        let at = Grid::<P, L>::rows_needed(w, split).unwrap();
+        let (a, b) = rebuilt.split_at_mut(at);
+        let mut rtop = Grid::<P, L>::new_cleared(a, w, split).unwrap();
+        let mut rbottom = Grid::<P, L>::new_cleared(b, w, h - split)
+            .unwrap()
+            .with_first_pixel(split * w);
+        assert_eq!(rbottom.first_pixel(), bottom.first_pixel());
+        for &(x, y, f) in &frags {
+            fb.insert(x, y, &f).unwrap();
+            let (s, r, y) = if y < split {
+                (&mut top, &mut rtop, y)
+            } else {
+                (&mut bottom, &mut rbottom, y - split)
+            };
+            s.insert(x, y, &f).unwrap();
+            r.insert(x, y, &f).unwrap();
+        }
+        assert_eq!(fb.insert_span_straight(4, 4, &lanes, 0xff).unwrap().0, 0);
+        assert_eq!(bottom.insert_span_straight(4, 4 - split, &lanes, 0xff).unwrap().0, 0);
+        assert_eq!(rbottom.insert_span_straight(4, 4 - split, &lanes, 0xff).unwrap().0, 0);
+        drop((top, bottom, rtop, rbottom, fb));
+        assert_eq!(split_rows, whole);
+        assert_eq!(rebuilt, whole);
+        // The same band from its rows without the first pixel id: other dithers.
+        let mut other = vec![Row::EMPTY; rows - at];
+        let mut band = Grid::<P, L>::new_cleared(&mut other, w, h - split).unwrap();
+        for &(x, y, f) in frags.iter().filter(|&&(_, y, _)| y >= split) {
+            band.insert(x, y - split, &f).unwrap();
+        }
+        drop(band);
+        assert_ne!(other[..], whole[at..]);
+    }
+    check::<Mlab<4>, Spans>();
+    check::<Ht<2>, Spans>();
+    check::<Mlab<3>, PixelMajor>();
+    check::<Ht<1>, PixelMajor>();
+}

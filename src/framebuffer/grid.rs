@@ -272,6 +272,37 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
         Ok(fb)
     }
 
+    /// This view with `first` as the id of its pixel `(0, 0)`
+    /// ([`first_pixel`](Framebuffer::first_pixel)), so that it hashes its fragments as the
+    /// band of a larger framebuffer that it is: `first = first_line * width` (wrapping) for
+    /// lines `first_line..` of a whole framebuffer. For a band rebuilt from its rows alone,
+    /// where the whole framebuffer is not at hand to split (a band passed across an FFI
+    /// boundary, as the C API's `mlab_framebuffer_band`); [`bands_mut`](Framebuffer::bands_mut)
+    /// and [`split_lines`](Framebuffer::split_lines) set it themselves. Only the dithers of
+    /// [`Unbiased`](crate::Unbiased) depend on it.
+    ///
+    /// ```
+    /// use mlab::glam::Vec3;
+    /// use mlab::{Fragment, Framebuffer, Row, SpanFramebuffer};
+    /// let (w, h) = (13, 4);
+    /// let f = Fragment::straight(Vec3::ONE, 0.02, 5.0)?.with_key(9); // faint: dithered
+    /// let mut whole = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(w, h)?];
+    /// let mut fb = SpanFramebuffer::<2>::new_cleared(&mut whole, w, h)?;
+    /// fb.insert(3, 2, &f)?;
+    /// // Lines 2..4 as a band of their own rows: pixel (3, 0) of the band is (3, 2).
+    /// let mut rows = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(w, 2)?];
+    /// let mut band = SpanFramebuffer::<2>::new_cleared(&mut rows, w, 2)?.with_first_pixel(2 * w);
+    /// assert_eq!(band.pixel_id(3, 0), fb.pixel_id(3, 2));
+    /// band.insert(3, 0, &f)?;
+    /// assert_eq!(band.as_rows(), &fb.as_rows()[fb.as_rows().len() / 2..]);
+    /// # Ok::<(), mlab::Error>(())
+    /// ```
+    #[inline(always)]
+    #[must_use]
+    pub fn with_first_pixel(self, first: u32) -> Self {
+        Grid { first, ..self }
+    }
+
     /// The contents of pixel `(x, y)`: `[Row; M]` for MLAB, `([Row; K], tail)` for HT.
     pub fn pixel(&self, x: u32, y: u32) -> Result<P::Value, FramebufferError> {
         self.dims.check(x, y)?;
