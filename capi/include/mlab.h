@@ -185,13 +185,15 @@ typedef struct MlabFramebuffer {
    */
   uint32_t height;
   /**
-   * Private: `layers - 1 + 8 * method + 16 * arithmetic`.
+   * Private: the id of pixel `(0, 0)` in the hashes that seed the dithers: 0, or for a
+   * band the id of its first pixel in the whole framebuffer (`first_line * width`).
    */
-  uint32_t kind;
+  uint32_t first;
   /**
-   * Private: set by a successful init.
+   * Private: set by a successful init: `MAGIC`, with the kind
+   * (`layers - 1 + 8 * method + 16 * arithmetic`) in its low 5 bits.
    */
-  uint32_t magic;
+  uint32_t tag;
 } MlabFramebuffer;
 
 /**
@@ -354,9 +356,11 @@ enum MlabStatus mlab_framebuffer_init(struct MlabFramebuffer *fb,
 /**
  * Fills `*band` with a view of lines `first_line .. first_line + lines` of `*fb` (the same
  * width, method and arithmetic; its line 0 is `first_line` of `fb`), for another thread:
- * bands that do not overlap may be used at the same time, one thread each. The rows are
- * not changed (no clear). On error after `band` was checked, `*band` is marked
- * uninitialized.
+ * bands that do not overlap may be used at the same time, one thread each. An insert at
+ * `(x, y)` of the band writes the bytes of the same insert at `(x, first_line + y)` of
+ * `fb`: the band keeps the whole framebuffer's pixel ids, which seed the dithers (a band
+ * of a band too). The rows are not changed (no clear). On error after `band` was checked,
+ * `*band` is marked uninitialized.
  *
  * # Safety
  * `fb` is null or points to a readable `MlabFramebuffer`; `band` is null or valid for a

@@ -228,17 +228,25 @@ pub struct MlabFramebuffer {
     width: u32,
     /// Private: height in lines.
     height: u32,
-    /// Private: `layers - 1 + 8 * method + 16 * arithmetic`.
-    kind: u32,
-    /// Private: set by a successful init.
-    magic: u32,
+    /// Private: the id of pixel `(0, 0)` in the hashes that seed the dithers: 0, or for a
+    /// band the id of its first pixel in the whole framebuffer (`first_line * width`).
+    first: u32,
+    /// Private: set by a successful init: `MAGIC`, with the kind
+    /// (`layers - 1 + 8 * method + 16 * arithmetic`) in its low 5 bits.
+    tag: u32,
 }
 
 #[cfg(target_pointer_width = "64")]
 const _: () = assert!(size_of::<MlabFramebuffer>() == 32 && align_of::<MlabFramebuffer>() == 8);
 
-/// The word that marks an initialized `MlabFramebuffer` ("MLAB").
-const MAGIC: u32 = 0x4d4c_4142;
+/// The bits of `MlabFramebuffer::tag` that hold the kind (0 to 31: `with_grid!`'s index).
+const KIND_MASK: u32 = 31;
+
+/// The word that marks an initialized `MlabFramebuffer` ("MLAB", its kind bits cleared): the
+/// rest of its `tag`. (Before the stable fragment key the kind and the magic word had fields
+/// of their own; the band's first pixel id took the kind's place, so that the struct keeps
+/// its size and alignment: the ABI of `MLAB_ABI_VERSION` 1, whose fields are private.)
+const MAGIC: u32 = 0x4d4c_4142 & !KIND_MASK;
 
 impl MlabFramebuffer {
     const ZEROED: MlabFramebuffer = MlabFramebuffer {
@@ -246,9 +254,15 @@ impl MlabFramebuffer {
         storage_rows: 0,
         width: 0,
         height: 0,
-        kind: 0,
-        magic: 0,
+        first: 0,
+        tag: 0,
     };
+
+    /// The kind, 0 to 31 (`layers - 1 + 8 * method + 16 * arithmetic`).
+    #[inline(always)]
+    fn kind(&self) -> u32 {
+        self.tag & KIND_MASK
+    }
 }
 
 /// Eight fragments of one line of 8 pixels, structure of arrays (lane `i` is pixel
@@ -338,7 +352,7 @@ unsafe fn state<'s>(fb: *const MlabFramebuffer) -> Result<&'s MlabFramebuffer, M
     check_ptr(fb, align_of::<MlabFramebuffer>())?;
     // SAFETY: non-null and aligned (checked); readable (the caller's guarantee).
     let s = unsafe { &*fb };
-    if s.magic != MAGIC {
+    if s.tag & !KIND_MASK != MAGIC {
         return Err(MlabStatus::NotInitialized);
     }
     Ok(s)
@@ -347,8 +361,9 @@ unsafe fn state<'s>(fb: *const MlabFramebuffer) -> Result<&'s MlabFramebuffer, M
 /// `$body` with `$fb` bound to the kernel's typed span grid over the rows of `$s` (an
 /// initialized [`MlabFramebuffer`]): `SpanFramebuffer<M, A>` or `HybridSpanFramebuffer<K, A>`,
 /// the grids that `DynFramebuffer` dispatches to, chosen by one `match` on the kind stored
-/// at init. The view is rebuilt for the call (`Grid::new`: a length check) and dropped at
-/// its end. Not `DynFramebuffer::new` itself: with its choice of the variant from `Layers`
+/// at init. The view is rebuilt for the call (`Grid::new`: a length check, then the band's
+/// first pixel id, `Grid::with_first_pixel`, so that a band hashes its pixels as the whole
+/// framebuffer does) and dropped at its end. Not `DynFramebuffer::new` itself: with its choice of the variant from `Layers`
 /// (16 comparisons) and then its `match`, a per-pixel insert through this API ran 373
 /// instructions, against 313 with this macro and 233 for the Rust loop over
 /// `DynFramebuffer::insert` (MLAB 4, callgrind; `docs/performance.md`, "C API"). The
@@ -382,10 +397,10 @@ macro_rules! with_grid {
         // `Row` (it is Pod), and `MlabRow` has its size and alignment (asserted above). The
         // slice lives only until this block ends.
         let rows = unsafe { core::slice::from_raw_parts_mut(s.storage.cast::<Row>(), s.storage_rows) };
-        match s.kind {
+        match s.kind() {
             $($k => {
                 #[allow(unused_mut)]
-                let mut $fb = <$t>::new(rows, s.width, s.height)?;
+                let mut $fb = <$t>::new(rows, s.width, s.height)?.with_first_pixel(s.first);
                 $body
             })*
             _ => Err(MlabStatus::NotInitialized),
@@ -505,9 +520,10 @@ pub unsafe extern "C" fn mlab_framebuffer_init(
             storage_rows,
             width,
             height,
-            // In 0..32: method is 0 or 1, layers 1 to 8, arithmetic 0 or 1 (checked above).
-            kind: (layers - 1) | method << 3 | arithmetic << 4,
-            magic: MAGIC,
+            first: 0,
+            // The kind is in 0..32: method is 0 or 1, layers 1 to 8, arithmetic 0 or 1
+            // (checked above).
+            tag: MAGIC | (layers - 1) | method << 3 | arithmetic << 4,
         };
         with_grid!(&state, f => {
             f.clear();
@@ -521,9 +537,11 @@ pub unsafe extern "C" fn mlab_framebuffer_init(
 
 /// Fills `*band` with a view of lines `first_line .. first_line + lines` of `*fb` (the same
 /// width, method and arithmetic; its line 0 is `first_line` of `fb`), for another thread:
-/// bands that do not overlap may be used at the same time, one thread each. The rows are
-/// not changed (no clear). On error after `band` was checked, `*band` is marked
-/// uninitialized.
+/// bands that do not overlap may be used at the same time, one thread each. An insert at
+/// `(x, y)` of the band writes the bytes of the same insert at `(x, first_line + y)` of
+/// `fb`: the band keeps the whole framebuffer's pixel ids, which seed the dithers (a band
+/// of a band too). The rows are not changed (no clear). On error after `band` was checked,
+/// `*band` is marked uninitialized.
 ///
 /// # Safety
 /// `fb` is null or points to a readable `MlabFramebuffer`; `band` is null or valid for a
@@ -548,7 +566,7 @@ pub unsafe extern "C" fn mlab_framebuffer_band(
             return Err(MlabStatus::OutOfBounds);
         }
         // Spans store lines one after the other: a band is a contiguous run of rows.
-        let line_rows = rows_needed(s.kind >> 3 & 1, (s.kind & 7) + 1, s.width, 1)?;
+        let line_rows = rows_needed(s.kind() >> 3 & 1, (s.kind() & 7) + 1, s.width, 1)?;
         if line_rows.checked_mul(s.height as usize) != Some(s.storage_rows) {
             return Err(MlabStatus::NotInitialized);
         }
@@ -561,6 +579,9 @@ pub unsafe extern "C" fn mlab_framebuffer_band(
             storage: s.storage.wrapping_add(offset),
             storage_rows: rows,
             height: lines,
+            // The id of its first pixel in the whole framebuffer (wrapping, as the kernel's
+            // `split_lines`): a band of a band keeps counting from the whole's.
+            first: s.first.wrapping_add(first_line.wrapping_mul(s.width)),
             ..s
         };
         // SAFETY: as above.
@@ -621,7 +642,8 @@ fn insert_typed<P: Pixel, const S: bool>(
     };
     // SAFETY: as in `with_grid!`.
     let rows = unsafe { core::slice::from_raw_parts_mut(s.storage.cast::<Row>(), s.storage_rows) };
-    let r = Grid::<P, Spans>::new(rows, s.width, s.height).and_then(|mut g| g.insert(x, y, &fragment));
+    let r = Grid::<P, Spans>::new(rows, s.width, s.height)
+        .and_then(|g| g.with_first_pixel(s.first).insert(x, y, &fragment));
     match r {
         Ok(()) => MlabStatus::Ok,
         Err(e) => e.into(),
@@ -694,7 +716,7 @@ unsafe fn insert_one(
         Ok(s) => s,
         Err(e) => return e,
     };
-    match table.get(s.kind as usize) {
+    match table.get(s.kind() as usize) {
         Some(insert) => insert(s, x, y, r, g, b, a, depth),
         None => MlabStatus::NotInitialized,
     }
