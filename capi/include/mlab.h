@@ -8,6 +8,11 @@
  * mlab_abi_version returns an MlabStatus; MLAB_STATUS_OK is 0 and an error changes nothing
  * (span and batch inserts say what they did insert).
  *
+ * Stable keys: the mlab_insert_*_keyed functions take the id of the primitive that emitted
+ * each fragment (unique in the frame, the same in every frame), which seeds the default
+ * arithmetic's dithers so that the image holds still under camera motion; the unkeyed ones
+ * seed them with the fragment's content, which re-rolls when its depth changes (docs/c.md).
+ *
  * Colors are linear (not sRGB), in and out. Depth: smaller is nearer; equal depths blend in
  * submission order, the later fragment in front.
  *
@@ -22,7 +27,8 @@
  * inside a span, slot r of its 8 pixels is 8 consecutive rows (layer-major).
  *
  * Threads: one thread per band (mlab_framebuffer_band) of lines; a call that writes rows
- * must not overlap any other call on the same rows.
+ * must not overlap any other call on the same rows. A band inserts the bytes of the whole
+ * framebuffer (it keeps the whole's pixel ids, which seed the dithers).
  */
 
 #ifndef MLAB_H
@@ -203,8 +209,8 @@ typedef uint32_t MlabArithmetic;
 
 /**
  * Eight fragments of one line of 8 pixels, structure of arrays (lane `i` is pixel
- * `(x + i, y)`), for the span inserts. Reserved for new fields: a keyed span (issue 30's
- * stable fragment key) will be a struct and functions of their own, not a change of this one.
+ * `(x + i, y)`), for the span inserts, without keys (their dithers are seeded by their
+ * content: `docs/c.md`, "Stable fragment keys"). With keys: `MlabFragmentSpanKeyed`.
  */
 typedef struct MlabFragmentSpan {
   /**
@@ -230,7 +236,41 @@ typedef struct MlabFragmentSpan {
 } MlabFragmentSpan;
 
 /**
- * One fragment of a batch: its pixel, its straight or premultiplied RGBA (linear) and depth.
+ * `MlabFragmentSpan` with a stable key per lane, for the keyed span inserts
+ * (`mlab_insert_span_straight_keyed`).
+ */
+typedef struct MlabFragmentSpanKeyed {
+  /**
+   * Red per lane (straight or premultiplied, as the function says; linear).
+   */
+  float r[8];
+  /**
+   * Green per lane.
+   */
+  float g[8];
+  /**
+   * Blue per lane.
+   */
+  float b[8];
+  /**
+   * Alpha per lane.
+   */
+  float a[8];
+  /**
+   * Depth per lane (smaller is nearer).
+   */
+  float depth[8];
+  /**
+   * The stable key per lane: the id of the primitive that emitted the lane's fragment,
+   * unique in the frame and the same in every frame (`mlab_insert_straight_keyed`).
+   */
+  uint32_t key[8];
+} MlabFragmentSpanKeyed;
+
+/**
+ * One fragment of a batch: its pixel, its straight or premultiplied RGBA (linear) and depth,
+ * without a key (its dithers are seeded by its content). With a key:
+ * `MlabPixelFragmentKeyed`.
  */
 typedef struct MlabPixelFragment {
   /**
@@ -250,6 +290,34 @@ typedef struct MlabPixelFragment {
    */
   float depth;
 } MlabPixelFragment;
+
+/**
+ * `MlabPixelFragment` with a stable key (32 bytes), for the keyed batch inserts
+ * (`mlab_insert_batch_straight_keyed`).
+ */
+typedef struct MlabPixelFragmentKeyed {
+  /**
+   * Column.
+   */
+  uint32_t x;
+  /**
+   * Line.
+   */
+  uint32_t y;
+  /**
+   * R, G, B, A (straight or premultiplied, as the function says).
+   */
+  float rgba[4];
+  /**
+   * Depth (smaller is nearer).
+   */
+  float depth;
+  /**
+   * The stable key: the id of the primitive that emitted the fragment, unique in the
+   * frame and the same in every frame (`mlab_insert_straight_keyed`).
+   */
+  uint32_t key;
+} MlabPixelFragmentKeyed;
 
 /**
  * A background kind: `MLAB_BACKGROUND_TRANSPARENT` or `MLAB_BACKGROUND_OPAQUE`.
@@ -386,7 +454,8 @@ enum MlabStatus mlab_framebuffer_clear(struct MlabFramebuffer *fb);
  * paper, quantized by the framebuffer's arithmetic. Refused, nothing changed: an invalid
  * fragment (NaN, infinite, negative color, alpha outside `[0, 1]`, `color * alpha` above
  * 1, infinite depth; checked first, the first failing check in the order of `docs/c.md`),
- * then a pixel outside.
+ * then a pixel outside. Without a key: the dithers of the default arithmetic are seeded by
+ * the fragment's content, and re-roll when its depth changes (`mlab_insert_straight_keyed`).
  *
  * # Safety
  * `fb` is null or points to a readable `MlabFramebuffer` whose storage satisfies the
@@ -416,6 +485,46 @@ enum MlabStatus mlab_insert_premultiplied(struct MlabFramebuffer *fb,
                                           float b,
                                           float a,
                                           float depth);
+
+/**
+ * `mlab_insert_straight` with a **stable key**: the id of what emitted the fragment, unique
+ * in the frame and the same in every frame (the primitive's id: a triangle's index in a
+ * software rasterizer; in a shader `gl_PrimitiveID` or `SV_PrimitiveID` mixed with the draw
+ * or instance id). The default arithmetic seeds its dithers with the key and the pixel, so
+ * a fragment is rounded the same way in every frame while the camera moves; without a key
+ * (`mlab_insert_straight`) the seed is the fragment's content, which changes with its depth,
+ * and a dense faint layer shimmers under camera motion. The paper arithmetic ignores the
+ * key. The bytes of the Rust API's `Fragment::with_key(key)`; the same checks and statuses
+ * as `mlab_insert_straight`.
+ *
+ * # Safety
+ * As `mlab_insert_straight`.
+ */
+enum MlabStatus mlab_insert_straight_keyed(struct MlabFramebuffer *fb,
+                                           uint32_t x,
+                                           uint32_t y,
+                                           float r,
+                                           float g,
+                                           float b,
+                                           float a,
+                                           float depth,
+                                           uint32_t key);
+
+/**
+ * `mlab_insert_premultiplied` with a stable key (`mlab_insert_straight_keyed`).
+ *
+ * # Safety
+ * As `mlab_insert_straight`.
+ */
+enum MlabStatus mlab_insert_premultiplied_keyed(struct MlabFramebuffer *fb,
+                                                uint32_t x,
+                                                uint32_t y,
+                                                float r,
+                                                float g,
+                                                float b,
+                                                float a,
+                                                float depth,
+                                                uint32_t key);
 
 /**
  * Inserts the lanes of `*fragments` that are on in `mask` (bit `i`: pixel `(x + i, y)`),
@@ -451,13 +560,42 @@ enum MlabStatus mlab_insert_span_premultiplied(struct MlabFramebuffer *fb,
                                                uint8_t *refused);
 
 /**
+ * `mlab_insert_span_straight` with a stable key per lane (`fragments->key[i]`, as
+ * `mlab_insert_straight_keyed`): byte-identical to `mlab_insert_straight_keyed` lane by
+ * lane, in lane order. The same checks, statuses and `*refused`.
+ *
+ * # Safety
+ * As `mlab_insert_span_straight`, `fragments` null or valid for a read of one
+ * `MlabFragmentSpanKeyed`.
+ */
+enum MlabStatus mlab_insert_span_straight_keyed(struct MlabFramebuffer *fb,
+                                                uint32_t x,
+                                                uint32_t y,
+                                                const struct MlabFragmentSpanKeyed *fragments,
+                                                uint8_t mask,
+                                                uint8_t *refused);
+
+/**
+ * `mlab_insert_span_straight_keyed` with premultiplied color.
+ *
+ * # Safety
+ * As `mlab_insert_span_straight_keyed`.
+ */
+enum MlabStatus mlab_insert_span_premultiplied_keyed(struct MlabFramebuffer *fb,
+                                                     uint32_t x,
+                                                     uint32_t y,
+                                                     const struct MlabFragmentSpanKeyed *fragments,
+                                                     uint8_t mask,
+                                                     uint8_t *refused);
+
+/**
  * Inserts `count` fragments (straight color) in array order, each into its own pixel,
  * through the kernel's span batcher (fragments gathered into 8-pixel span inserts inside
  * the call): byte-identical to calling `mlab_insert_straight` on each in order, faster
  * for MLAB when the fragments of a line come together (`docs/performance.md`). Stops at
  * the first fragment that is invalid or outside: `*inserted` is then its index (the
  * fragments before it are in the framebuffer, it and those after it are not) and the
- * status says why; otherwise `*inserted = count`. Uses about 44 KiB of stack.
+ * status says why; otherwise `*inserted = count`. Uses about 52 KiB of stack.
  *
  * # Safety
  * `fb` as for `mlab_insert_straight`; `fragments` is null or valid for reads of `count`
@@ -478,6 +616,31 @@ enum MlabStatus mlab_insert_batch_premultiplied(struct MlabFramebuffer *fb,
                                                 const struct MlabPixelFragment *fragments,
                                                 size_t count,
                                                 size_t *inserted);
+
+/**
+ * `mlab_insert_batch_straight` of fragments with stable keys (`MlabPixelFragmentKeyed`,
+ * the key as in `mlab_insert_straight_keyed`): byte-identical to calling
+ * `mlab_insert_straight_keyed` on each in order. The same checks, statuses and `*inserted`.
+ *
+ * # Safety
+ * As `mlab_insert_batch_straight`, `fragments` null or valid for reads of `count`
+ * `MlabPixelFragmentKeyed`.
+ */
+enum MlabStatus mlab_insert_batch_straight_keyed(struct MlabFramebuffer *fb,
+                                                 const struct MlabPixelFragmentKeyed *fragments,
+                                                 size_t count,
+                                                 size_t *inserted);
+
+/**
+ * `mlab_insert_batch_straight_keyed` with premultiplied color.
+ *
+ * # Safety
+ * As `mlab_insert_batch_straight_keyed`.
+ */
+enum MlabStatus mlab_insert_batch_premultiplied_keyed(struct MlabFramebuffer *fb,
+                                                      const struct MlabPixelFragmentKeyed *fragments,
+                                                      size_t count,
+                                                      size_t *inserted);
 
 /**
  * Resolves every pixel into RGBA8 (`out`: `4 * out_pixels` bytes, `out_pixels = width *

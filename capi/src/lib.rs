@@ -266,8 +266,8 @@ impl MlabFramebuffer {
 }
 
 /// Eight fragments of one line of 8 pixels, structure of arrays (lane `i` is pixel
-/// `(x + i, y)`), for the span inserts. Reserved for new fields: a keyed span (issue 30's
-/// stable fragment key) will be a struct and functions of their own, not a change of this one.
+/// `(x + i, y)`), for the span inserts, without keys (their dithers are seeded by their
+/// content: `docs/c.md`, "Stable fragment keys"). With keys: `MlabFragmentSpanKeyed`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MlabFragmentSpan {
@@ -283,7 +283,29 @@ pub struct MlabFragmentSpan {
     pub depth: [f32; 8],
 }
 
-/// One fragment of a batch: its pixel, its straight or premultiplied RGBA (linear) and depth.
+/// `MlabFragmentSpan` with a stable key per lane, for the keyed span inserts
+/// (`mlab_insert_span_straight_keyed`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MlabFragmentSpanKeyed {
+    /// Red per lane (straight or premultiplied, as the function says; linear).
+    pub r: [f32; 8],
+    /// Green per lane.
+    pub g: [f32; 8],
+    /// Blue per lane.
+    pub b: [f32; 8],
+    /// Alpha per lane.
+    pub a: [f32; 8],
+    /// Depth per lane (smaller is nearer).
+    pub depth: [f32; 8],
+    /// The stable key per lane: the id of the primitive that emitted the lane's fragment,
+    /// unique in the frame and the same in every frame (`mlab_insert_straight_keyed`).
+    pub key: [u32; 8],
+}
+
+/// One fragment of a batch: its pixel, its straight or premultiplied RGBA (linear) and depth,
+/// without a key (its dithers are seeded by its content). With a key:
+/// `MlabPixelFragmentKeyed`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MlabPixelFragment {
@@ -295,6 +317,87 @@ pub struct MlabPixelFragment {
     pub rgba: [f32; 4],
     /// Depth (smaller is nearer).
     pub depth: f32,
+}
+
+/// `MlabPixelFragment` with a stable key (32 bytes), for the keyed batch inserts
+/// (`mlab_insert_batch_straight_keyed`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MlabPixelFragmentKeyed {
+    /// Column.
+    pub x: u32,
+    /// Line.
+    pub y: u32,
+    /// R, G, B, A (straight or premultiplied, as the function says).
+    pub rgba: [f32; 4],
+    /// Depth (smaller is nearer).
+    pub depth: f32,
+    /// The stable key: the id of the primitive that emitted the fragment, unique in the
+    /// frame and the same in every frame (`mlab_insert_straight_keyed`).
+    pub key: u32,
+}
+
+/// The fragments of a span insert, with or without keys.
+trait SpanFragments: Copy {
+    fn lanes(self) -> FragmentLanes;
+}
+
+impl SpanFragments for MlabFragmentSpan {
+    #[inline(always)]
+    fn lanes(self) -> FragmentLanes {
+        FragmentLanes {
+            color: [self.r, self.g, self.b],
+            alpha: self.a,
+            depth: self.depth,
+            key: None,
+        }
+    }
+}
+
+impl SpanFragments for MlabFragmentSpanKeyed {
+    #[inline(always)]
+    fn lanes(self) -> FragmentLanes {
+        FragmentLanes {
+            color: [self.r, self.g, self.b],
+            alpha: self.a,
+            depth: self.depth,
+            key: Some(self.key),
+        }
+    }
+}
+
+/// A fragment of a batch, with or without a key.
+trait PixelFragment: Copy {
+    /// Its pixel, RGBA, depth and key.
+    fn parts(&self) -> (u32, u32, [f32; 4], f32, Option<u32>);
+}
+
+impl PixelFragment for MlabPixelFragment {
+    #[inline(always)]
+    fn parts(&self) -> (u32, u32, [f32; 4], f32, Option<u32>) {
+        (self.x, self.y, self.rgba, self.depth, None)
+    }
+}
+
+impl PixelFragment for MlabPixelFragmentKeyed {
+    #[inline(always)]
+    fn parts(&self) -> (u32, u32, [f32; 4], f32, Option<u32>) {
+        (self.x, self.y, self.rgba, self.depth, Some(self.key))
+    }
+}
+
+/// A validated fragment, straight color or not, with its key if it has one.
+#[inline(always)]
+fn fragment(rgba: [f32; 4], depth: f32, key: Option<u32>, straight: bool) -> Result<Fragment, FragmentError> {
+    let f = if straight {
+        Fragment::straight_rgba(rgba, depth)
+    } else {
+        Fragment::premultiplied_rgba(rgba, depth)
+    }?;
+    Ok(match key {
+        Some(k) => f.with_key(k),
+        None => f,
+    })
 }
 
 /// Run `f`, catching a panic: no unwinding crosses the C boundary.
@@ -608,7 +711,7 @@ pub unsafe extern "C" fn mlab_framebuffer_clear(fb: *mut MlabFramebuffer) -> Mla
 }
 
 /// One fragment into the pixel of a typed grid: straight or premultiplied color (`S`),
-/// validated, then inserted.
+/// validated, given its key if it has one, then inserted.
 ///
 /// The per-pixel inserts are the one place where the cost of the boundary is paid per
 /// fragment, so they are written for it (MLAB 4, callgrind, against 233 instructions per
@@ -617,11 +720,11 @@ pub unsafe extern "C" fn mlab_framebuffer_clear(fb: *mut MlabFramebuffer) -> Mla
 /// the color as scalars in registers all the way, 277 instructions. Through `guard` and
 /// `with_grid!` (a closure called by `catch_unwind`, the fragment validated outside it and
 /// read back through memory, and 32 inlined inserts in one function) it ran 313; the same
-/// with the table but still inside `guard`, 307.
-type InsertTyped = fn(&MlabFramebuffer, u32, u32, f32, f32, f32, f32, f32) -> MlabStatus;
-
+/// with the table but still inside `guard`, 307. The keyed inserts have tables of their own
+/// (`InsertKeyedTyped`), so that the unkeyed ones pass no key.
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn insert_typed<P: Pixel, const S: bool>(
+fn insert_fragment<P: Pixel, const S: bool>(
     s: &MlabFramebuffer,
     x: u32,
     y: u32,
@@ -630,13 +733,9 @@ fn insert_typed<P: Pixel, const S: bool>(
     b: f32,
     a: f32,
     depth: f32,
+    key: Option<u32>,
 ) -> MlabStatus {
-    let fragment = if S {
-        Fragment::straight_rgba([r, g, b, a], depth)
-    } else {
-        Fragment::premultiplied_rgba([r, g, b, a], depth)
-    };
-    let fragment = match fragment {
+    let fragment = match fragment([r, g, b, a], depth, key, S) {
         Ok(f) => f,
         Err(e) => return e.into(),
     };
@@ -650,49 +749,88 @@ fn insert_typed<P: Pixel, const S: bool>(
     }
 }
 
+/// A typed per-pixel insert without a key (`insert_fragment`).
+type InsertTyped = fn(&MlabFramebuffer, u32, u32, f32, f32, f32, f32, f32) -> MlabStatus;
+
+/// A typed per-pixel insert with a key (`insert_fragment`).
+type InsertKeyedTyped = fn(&MlabFramebuffer, u32, u32, f32, f32, f32, f32, f32, u32) -> MlabStatus;
+
+#[allow(clippy::too_many_arguments)]
+fn insert_typed<P: Pixel, const S: bool>(
+    s: &MlabFramebuffer,
+    x: u32,
+    y: u32,
+    r: f32,
+    g: f32,
+    b: f32,
+    a: f32,
+    depth: f32,
+) -> MlabStatus {
+    insert_fragment::<P, S>(s, x, y, r, g, b, a, depth, None)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn insert_keyed_typed<P: Pixel, const S: bool>(
+    s: &MlabFramebuffer,
+    x: u32,
+    y: u32,
+    r: f32,
+    g: f32,
+    b: f32,
+    a: f32,
+    depth: f32,
+    key: u32,
+) -> MlabStatus {
+    insert_fragment::<P, S>(s, x, y, r, g, b, a, depth, Some(key))
+}
+
 macro_rules! insert_table {
-    ($s:literal) => {
+    ($f:ident, $s:literal) => {
         [
-            insert_typed::<Mlab<1, Unbiased>, $s>,
-            insert_typed::<Mlab<2, Unbiased>, $s>,
-            insert_typed::<Mlab<3, Unbiased>, $s>,
-            insert_typed::<Mlab<4, Unbiased>, $s>,
-            insert_typed::<Mlab<5, Unbiased>, $s>,
-            insert_typed::<Mlab<6, Unbiased>, $s>,
-            insert_typed::<Mlab<7, Unbiased>, $s>,
-            insert_typed::<Mlab<8, Unbiased>, $s>,
-            insert_typed::<Ht<1, Unbiased>, $s>,
-            insert_typed::<Ht<2, Unbiased>, $s>,
-            insert_typed::<Ht<3, Unbiased>, $s>,
-            insert_typed::<Ht<4, Unbiased>, $s>,
-            insert_typed::<Ht<5, Unbiased>, $s>,
-            insert_typed::<Ht<6, Unbiased>, $s>,
-            insert_typed::<Ht<7, Unbiased>, $s>,
-            insert_typed::<Ht<8, Unbiased>, $s>,
-            insert_typed::<Mlab<1, Paper>, $s>,
-            insert_typed::<Mlab<2, Paper>, $s>,
-            insert_typed::<Mlab<3, Paper>, $s>,
-            insert_typed::<Mlab<4, Paper>, $s>,
-            insert_typed::<Mlab<5, Paper>, $s>,
-            insert_typed::<Mlab<6, Paper>, $s>,
-            insert_typed::<Mlab<7, Paper>, $s>,
-            insert_typed::<Mlab<8, Paper>, $s>,
-            insert_typed::<Ht<1, Paper>, $s>,
-            insert_typed::<Ht<2, Paper>, $s>,
-            insert_typed::<Ht<3, Paper>, $s>,
-            insert_typed::<Ht<4, Paper>, $s>,
-            insert_typed::<Ht<5, Paper>, $s>,
-            insert_typed::<Ht<6, Paper>, $s>,
-            insert_typed::<Ht<7, Paper>, $s>,
-            insert_typed::<Ht<8, Paper>, $s>,
+            $f::<Mlab<1, Unbiased>, $s>,
+            $f::<Mlab<2, Unbiased>, $s>,
+            $f::<Mlab<3, Unbiased>, $s>,
+            $f::<Mlab<4, Unbiased>, $s>,
+            $f::<Mlab<5, Unbiased>, $s>,
+            $f::<Mlab<6, Unbiased>, $s>,
+            $f::<Mlab<7, Unbiased>, $s>,
+            $f::<Mlab<8, Unbiased>, $s>,
+            $f::<Ht<1, Unbiased>, $s>,
+            $f::<Ht<2, Unbiased>, $s>,
+            $f::<Ht<3, Unbiased>, $s>,
+            $f::<Ht<4, Unbiased>, $s>,
+            $f::<Ht<5, Unbiased>, $s>,
+            $f::<Ht<6, Unbiased>, $s>,
+            $f::<Ht<7, Unbiased>, $s>,
+            $f::<Ht<8, Unbiased>, $s>,
+            $f::<Mlab<1, Paper>, $s>,
+            $f::<Mlab<2, Paper>, $s>,
+            $f::<Mlab<3, Paper>, $s>,
+            $f::<Mlab<4, Paper>, $s>,
+            $f::<Mlab<5, Paper>, $s>,
+            $f::<Mlab<6, Paper>, $s>,
+            $f::<Mlab<7, Paper>, $s>,
+            $f::<Mlab<8, Paper>, $s>,
+            $f::<Ht<1, Paper>, $s>,
+            $f::<Ht<2, Paper>, $s>,
+            $f::<Ht<3, Paper>, $s>,
+            $f::<Ht<4, Paper>, $s>,
+            $f::<Ht<5, Paper>, $s>,
+            $f::<Ht<6, Paper>, $s>,
+            $f::<Ht<7, Paper>, $s>,
+            $f::<Ht<8, Paper>, $s>,
         ]
     };
 }
 
 /// The per-pixel inserts by kind (the index `with_grid!` matches on), straight color.
-static INSERT_STRAIGHT: [InsertTyped; 32] = insert_table!(true);
+static INSERT_STRAIGHT: [InsertTyped; 32] = insert_table!(insert_typed, true);
 /// The per-pixel inserts by kind, premultiplied color.
-static INSERT_PREMULTIPLIED: [InsertTyped; 32] = insert_table!(false);
+static INSERT_PREMULTIPLIED: [InsertTyped; 32] = insert_table!(insert_typed, false);
+/// The keyed per-pixel inserts by kind, straight color.
+static INSERT_STRAIGHT_KEYED: [InsertKeyedTyped; 32] = insert_table!(insert_keyed_typed, true);
+/// The keyed per-pixel inserts by kind, premultiplied color.
+static INSERT_PREMULTIPLIED_KEYED: [InsertKeyedTyped; 32] = insert_table!(insert_keyed_typed, false);
 
 /// A per-pixel insert: the state checked, then a tail call of the typed insert of its kind.
 ///
@@ -722,12 +860,42 @@ unsafe fn insert_one(
     }
 }
 
+/// `insert_one` with a key.
+///
+/// # Safety
+/// As `mlab_insert_straight`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn insert_one_keyed(
+    table: &[InsertKeyedTyped; 32],
+    fb: *mut MlabFramebuffer,
+    x: u32,
+    y: u32,
+    r: f32,
+    g: f32,
+    b: f32,
+    a: f32,
+    depth: f32,
+    key: u32,
+) -> MlabStatus {
+    // SAFETY: the caller's guarantee on `fb`.
+    let s = match unsafe { state(fb) } {
+        Ok(s) => s,
+        Err(e) => return e,
+    };
+    match table.get(s.kind() as usize) {
+        Some(insert) => insert(s, x, y, r, g, b, a, depth, key),
+        None => MlabStatus::NotInitialized,
+    }
+}
+
 /// Inserts one fragment of **straight** (not premultiplied) linear color `r, g, b`, alpha `a`
 /// and depth (smaller is nearer) into pixel `(x, y)`: Listing 1 (MLAB) or 2 (HT) of the
 /// paper, quantized by the framebuffer's arithmetic. Refused, nothing changed: an invalid
 /// fragment (NaN, infinite, negative color, alpha outside `[0, 1]`, `color * alpha` above
 /// 1, infinite depth; checked first, the first failing check in the order of `docs/c.md`),
-/// then a pixel outside.
+/// then a pixel outside. Without a key: the dithers of the default arithmetic are seeded by
+/// the fragment's content, and re-roll when its depth changes (`mlab_insert_straight_keyed`).
 ///
 /// # Safety
 /// `fb` is null or points to a readable `MlabFramebuffer` whose storage satisfies the
@@ -769,15 +937,65 @@ pub unsafe extern "C" fn mlab_insert_premultiplied(
     unsafe { insert_one(&INSERT_PREMULTIPLIED, fb, x, y, r, g, b, a, depth) }
 }
 
-/// A span insert of fragments (straight color or not).
+/// `mlab_insert_straight` with a **stable key**: the id of what emitted the fragment, unique
+/// in the frame and the same in every frame (the primitive's id: a triangle's index in a
+/// software rasterizer; in a shader `gl_PrimitiveID` or `SV_PrimitiveID` mixed with the draw
+/// or instance id). The default arithmetic seeds its dithers with the key and the pixel, so
+/// a fragment is rounded the same way in every frame while the camera moves; without a key
+/// (`mlab_insert_straight`) the seed is the fragment's content, which changes with its depth,
+/// and a dense faint layer shimmers under camera motion. The paper arithmetic ignores the
+/// key. The bytes of the Rust API's `Fragment::with_key(key)`; the same checks and statuses
+/// as `mlab_insert_straight`.
 ///
 /// # Safety
-/// As `mlab_insert_span_straight`.
-unsafe fn insert_span(
+/// As `mlab_insert_straight`.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlab_insert_straight_keyed(
     fb: *mut MlabFramebuffer,
     x: u32,
     y: u32,
-    fragments: *const MlabFragmentSpan,
+    r: f32,
+    g: f32,
+    b: f32,
+    a: f32,
+    depth: f32,
+    key: u32,
+) -> MlabStatus {
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe { insert_one_keyed(&INSERT_STRAIGHT_KEYED, fb, x, y, r, g, b, a, depth, key) }
+}
+
+/// `mlab_insert_premultiplied` with a stable key (`mlab_insert_straight_keyed`).
+///
+/// # Safety
+/// As `mlab_insert_straight`.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn mlab_insert_premultiplied_keyed(
+    fb: *mut MlabFramebuffer,
+    x: u32,
+    y: u32,
+    r: f32,
+    g: f32,
+    b: f32,
+    a: f32,
+    depth: f32,
+    key: u32,
+) -> MlabStatus {
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe { insert_one_keyed(&INSERT_PREMULTIPLIED_KEYED, fb, x, y, r, g, b, a, depth, key) }
+}
+
+/// A span insert of fragments (straight color or not, keyed or not).
+///
+/// # Safety
+/// As `mlab_insert_span_straight`, `fragments` null or valid for a read of one `T`.
+unsafe fn insert_span<T: SpanFragments>(
+    fb: *mut MlabFramebuffer,
+    x: u32,
+    y: u32,
+    fragments: *const T,
     mask: u8,
     refused: *mut u8,
     straight: bool,
@@ -785,16 +1003,10 @@ unsafe fn insert_span(
     guard(|| {
         // SAFETY: the caller's guarantee on `fb`.
         let s = unsafe { state(fb) }?;
-        check_ptr(fragments, align_of::<MlabFragmentSpan>())?;
+        check_ptr(fragments, align_of::<T>())?;
         check_ptr(refused, 1)?;
         // SAFETY: non-null, aligned (checked), readable (the caller's guarantee); a copy.
-        let span = unsafe { fragments.read() };
-        let lanes = FragmentLanes {
-            color: [span.r, span.g, span.b],
-            alpha: span.a,
-            depth: span.depth,
-            key: None,
-        };
+        let lanes = unsafe { fragments.read() }.lanes();
         let invalid = with_grid!(s, f => {
             let r = if straight {
                 f.insert_span_straight(x, y, &lanes, mask)
@@ -810,13 +1022,8 @@ unsafe fn insert_span(
         }
         // The first refused lane's reason, by the scalar constructor (the same checks).
         let i = invalid.0.trailing_zeros() as usize;
-        let rgba = [span.r[i], span.g[i], span.b[i], span.a[i]];
-        let one = if straight {
-            Fragment::straight_rgba(rgba, span.depth[i])
-        } else {
-            Fragment::premultiplied_rgba(rgba, span.depth[i])
-        };
-        match one {
+        let rgba = [lanes.color[0][i], lanes.color[1][i], lanes.color[2][i], lanes.alpha[i]];
+        match fragment(rgba, lanes.depth[i], None, straight) {
             Err(e) => Err(e.into()),
             Ok(_) => Err(MlabStatus::Internal),
         }
@@ -864,25 +1071,58 @@ pub unsafe extern "C" fn mlab_insert_span_premultiplied(
     unsafe { insert_span(fb, x, y, fragments, mask, refused, false) }
 }
 
+/// `mlab_insert_span_straight` with a stable key per lane (`fragments->key[i]`, as
+/// `mlab_insert_straight_keyed`): byte-identical to `mlab_insert_straight_keyed` lane by
+/// lane, in lane order. The same checks, statuses and `*refused`.
+///
+/// # Safety
+/// As `mlab_insert_span_straight`, `fragments` null or valid for a read of one
+/// `MlabFragmentSpanKeyed`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlab_insert_span_straight_keyed(
+    fb: *mut MlabFramebuffer,
+    x: u32,
+    y: u32,
+    fragments: *const MlabFragmentSpanKeyed,
+    mask: u8,
+    refused: *mut u8,
+) -> MlabStatus {
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe { insert_span(fb, x, y, fragments, mask, refused, true) }
+}
+
+/// `mlab_insert_span_straight_keyed` with premultiplied color.
+///
+/// # Safety
+/// As `mlab_insert_span_straight_keyed`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlab_insert_span_premultiplied_keyed(
+    fb: *mut MlabFramebuffer,
+    x: u32,
+    y: u32,
+    fragments: *const MlabFragmentSpanKeyed,
+    mask: u8,
+    refused: *mut u8,
+) -> MlabStatus {
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe { insert_span(fb, x, y, fragments, mask, refused, false) }
+}
+
 /// `events` through a span batcher over `fb`, stopping at the first refused one: how many
 /// went in, and the status. A function of its own (not inlined into each arm of
-/// `with_grid!`), so that one batcher (about 44 KiB) is on the stack, not one per arm.
+/// `with_grid!`), so that one batcher (about 52 KiB) is on the stack, not one per arm.
 #[inline(never)]
-fn batch_into<F: Framebuffer>(
+fn batch_into<F: Framebuffer, E: PixelFragment>(
     fb: &mut F,
-    events: &[MlabPixelFragment],
+    events: &[E],
     straight: bool,
 ) -> Result<(usize, Result<(), MlabStatus>), MlabStatus> {
     let mut batch = SpanBatcher::new(fb);
     for (i, e) in events.iter().enumerate() {
-        let one = if straight {
-            Fragment::straight_rgba(e.rgba, e.depth)
-        } else {
-            Fragment::premultiplied_rgba(e.rgba, e.depth)
-        };
-        let r = one
+        let (x, y, rgba, depth, key) = e.parts();
+        let r = fragment(rgba, depth, key, straight)
             .map_err(MlabStatus::from)
-            .and_then(|v| Ok(batch.insert(e.x, e.y, &v)?));
+            .and_then(|v| Ok(batch.insert(x, y, &v)?));
         if let Err(st) = r {
             batch.finish()?;
             return Ok((i, Err(st)));
@@ -892,13 +1132,13 @@ fn batch_into<F: Framebuffer>(
     Ok((events.len(), Ok(())))
 }
 
-/// A batch of fragments through the kernel's span batcher.
+/// A batch of fragments (keyed or not) through the kernel's span batcher.
 ///
 /// # Safety
-/// As `mlab_insert_batch_straight`.
-unsafe fn insert_batch(
+/// As `mlab_insert_batch_straight`, `fragments` null or valid for reads of `count` `E`.
+unsafe fn insert_batch<E: PixelFragment>(
     fb: *mut MlabFramebuffer,
-    fragments: *const MlabPixelFragment,
+    fragments: *const E,
     count: usize,
     inserted: *mut usize,
     straight: bool,
@@ -906,9 +1146,9 @@ unsafe fn insert_batch(
     guard(|| {
         // SAFETY: the caller's guarantee on `fb`.
         let s = unsafe { state(fb) }?;
-        check_ptr(fragments, align_of::<MlabPixelFragment>())?;
+        check_ptr(fragments, align_of::<E>())?;
         check_ptr(inserted, align_of::<usize>())?;
-        if count > isize::MAX as usize / size_of::<MlabPixelFragment>() {
+        if count > isize::MAX as usize / size_of::<E>() {
             return Err(MlabStatus::SizeOverflow);
         }
         // SAFETY: non-null, aligned, at most isize::MAX bytes (checked); readable for
@@ -927,7 +1167,7 @@ unsafe fn insert_batch(
 /// for MLAB when the fragments of a line come together (`docs/performance.md`). Stops at
 /// the first fragment that is invalid or outside: `*inserted` is then its index (the
 /// fragments before it are in the framebuffer, it and those after it are not) and the
-/// status says why; otherwise `*inserted = count`. Uses about 44 KiB of stack.
+/// status says why; otherwise `*inserted = count`. Uses about 52 KiB of stack.
 ///
 /// # Safety
 /// `fb` as for `mlab_insert_straight`; `fragments` is null or valid for reads of `count`
@@ -951,6 +1191,39 @@ pub unsafe extern "C" fn mlab_insert_batch_straight(
 pub unsafe extern "C" fn mlab_insert_batch_premultiplied(
     fb: *mut MlabFramebuffer,
     fragments: *const MlabPixelFragment,
+    count: usize,
+    inserted: *mut usize,
+) -> MlabStatus {
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe { insert_batch(fb, fragments, count, inserted, false) }
+}
+
+/// `mlab_insert_batch_straight` of fragments with stable keys (`MlabPixelFragmentKeyed`,
+/// the key as in `mlab_insert_straight_keyed`): byte-identical to calling
+/// `mlab_insert_straight_keyed` on each in order. The same checks, statuses and `*inserted`.
+///
+/// # Safety
+/// As `mlab_insert_batch_straight`, `fragments` null or valid for reads of `count`
+/// `MlabPixelFragmentKeyed`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlab_insert_batch_straight_keyed(
+    fb: *mut MlabFramebuffer,
+    fragments: *const MlabPixelFragmentKeyed,
+    count: usize,
+    inserted: *mut usize,
+) -> MlabStatus {
+    // SAFETY: the caller's guarantee, passed on.
+    unsafe { insert_batch(fb, fragments, count, inserted, true) }
+}
+
+/// `mlab_insert_batch_straight_keyed` with premultiplied color.
+///
+/// # Safety
+/// As `mlab_insert_batch_straight_keyed`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn mlab_insert_batch_premultiplied_keyed(
+    fb: *mut MlabFramebuffer,
+    fragments: *const MlabPixelFragmentKeyed,
     count: usize,
     inserted: *mut usize,
 ) -> MlabStatus {

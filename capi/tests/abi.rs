@@ -403,3 +403,387 @@ fn bands_on_threads_equal_the_whole_framebuffer() {
         same(&banded.bytes(), &fresh.bytes(), "cleared bands");
     }
 }
+
+/// A stream of keyed fragments: keys shared by runs of fragments (the primitives' ids),
+/// some arbitrary, some near `u32::MAX`; the same pixels and values as `stream`.
+fn keyed_stream(seed: u64, n: usize) -> Vec<MlabPixelFragmentKeyed> {
+    let mut rng = Rng(seed);
+    (0..n)
+        .map(|i| {
+            let MlabPixelFragment { x, y, rgba, depth } = event(&mut rng);
+            let key = match rng.below(8) {
+                0 => rng.next() as u32,
+                1 => u32::MAX - (i / 7) as u32,
+                _ => (i / 6) as u32,
+            };
+            MlabPixelFragmentKeyed { x, y, rgba, depth, key }
+        })
+        .collect()
+}
+
+/// The Rust API's fragment of a keyed event, and the status the C API must return for it.
+fn rust_keyed<A: Arithmetic>(r: &mut DynFramebuffer<'_, A>, e: &MlabPixelFragmentKeyed, straight: bool) -> MlabStatus {
+    let f = if straight {
+        Fragment::straight_rgba(e.rgba, e.depth)
+    } else {
+        Fragment::premultiplied_rgba(e.rgba, e.depth)
+    };
+    match f {
+        Err(err) => MlabStatus::from(err),
+        Ok(f) => r
+            .insert(e.x, e.y, &f.with_key(e.key))
+            .map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
+    }
+}
+
+/// A random keyed span (some lanes invalid).
+fn keyed_span(rng: &mut Rng) -> MlabFragmentSpanKeyed {
+    let mut span = MlabFragmentSpanKeyed {
+        r: [0.0; 8],
+        g: [0.0; 8],
+        b: [0.0; 8],
+        a: [0.0; 8],
+        depth: [0.0; 8],
+        key: [0; 8],
+    };
+    let key = rng.next() as u32;
+    for lane in 0..8 {
+        let e = event(rng);
+        [span.r[lane], span.g[lane], span.b[lane], span.a[lane]] = e.rgba;
+        span.depth[lane] = e.depth;
+        // Mostly one primitive over the span, sometimes another.
+        span.key[lane] = if rng.below(4) == 0 { rng.next() as u32 } else { key };
+    }
+    span
+}
+
+fn keyed_lanes(span: &MlabFragmentSpanKeyed) -> FragmentLanes {
+    FragmentLanes {
+        color: [span.r, span.g, span.b],
+        alpha: span.a,
+        depth: span.depth,
+        key: Some(span.key),
+    }
+}
+
+/// The keyed inserts (per pixel, span, batch; straight and premultiplied) against
+/// `DynFramebuffer` with `Fragment::with_key` and `FragmentLanes::key`, mixed with unkeyed
+/// per-pixel inserts.
+fn check_keyed<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArithmetic) {
+    let kind = match method {
+        MLAB_METHOD_MLAB => Layers::Mlab(layers as usize),
+        _ => Layers::Hybrid(layers as usize),
+    };
+    let what = format!("keyed {kind:?} arith {arith}");
+    let events = keyed_stream(0x51ed_270b_2f4a_9e33 ^ (layers as u64) << 8 ^ method as u64, 900);
+
+    let mut c = c_fb(method, layers, arith, W, H);
+    let mut storage = vec![Row::EMPTY; kind.rows_needed(W, H).unwrap()];
+    let mut r = DynFramebuffer::<A>::new_cleared(kind, &mut storage, W, H).unwrap();
+    let mut errors = 0;
+    for (i, e) in events.iter().enumerate() {
+        let [cr, cg, cb, ca] = e.rgba;
+        let straight = i % 3 != 0;
+        let keyed = i % 5 != 4;
+        // SAFETY: `c.fb` is initialized over its live storage.
+        let got = unsafe {
+            match (keyed, straight) {
+                (true, true) => mlab_insert_straight_keyed(&mut c.fb, e.x, e.y, cr, cg, cb, ca, e.depth, e.key),
+                (true, false) => mlab_insert_premultiplied_keyed(&mut c.fb, e.x, e.y, cr, cg, cb, ca, e.depth, e.key),
+                (false, true) => mlab_insert_straight(&mut c.fb, e.x, e.y, cr, cg, cb, ca, e.depth),
+                (false, false) => mlab_insert_premultiplied(&mut c.fb, e.x, e.y, cr, cg, cb, ca, e.depth),
+            }
+        };
+        let want = if keyed {
+            rust_keyed(&mut r, e, straight)
+        } else {
+            let f = if straight {
+                Fragment::straight_rgba(e.rgba, e.depth)
+            } else {
+                Fragment::premultiplied_rgba(e.rgba, e.depth)
+            };
+            f.map_or_else(MlabStatus::from, |f| {
+                r.insert(e.x, e.y, &f)
+                    .map_or_else(MlabStatus::from, |()| MlabStatus::Ok)
+            })
+        };
+        assert_eq!(got, want, "{what}: fragment {i} {e:?}");
+        errors += (got != MlabStatus::Ok) as usize;
+    }
+    assert!(errors > 20 && errors < 300, "{what}: some bad fragments ({errors})");
+    same(&c.bytes(), &rust_bytes(&r), &format!("{what}: per-pixel inserts"));
+    check_resolves(&c, &r, &what);
+
+    // Keyed spans on top.
+    let mut rng = Rng(layers as u64 * 91 + method as u64);
+    for i in 0..120 {
+        let x = rng.below(W as u64 - 7) as u32 + if i % 5 == 0 { 7 } else { 0 };
+        let y = rng.below(H as u64) as u32;
+        let mask = rng.below(256) as u8;
+        let span = keyed_span(&mut rng);
+        let straight = i % 2 == 0;
+        let mut refused = 0xeeu8;
+        // SAFETY: initialized framebuffer, a span to read, a byte to write.
+        let got = unsafe {
+            if straight {
+                mlab_insert_span_straight_keyed(&mut c.fb, x, y, &span, mask, &mut refused)
+            } else {
+                mlab_insert_span_premultiplied_keyed(&mut c.fb, x, y, &span, mask, &mut refused)
+            }
+        };
+        let lanes = keyed_lanes(&span);
+        let want = if straight {
+            r.insert_span_straight(x, y, &lanes, mask)
+        } else {
+            r.insert_span_fragments(x, y, &lanes, mask)
+        };
+        match want {
+            Err(e) => {
+                assert_eq!(got, MlabStatus::from(e), "{what}: span {i}");
+                assert_eq!(refused, 0xee, "{what}: span {i}: refused untouched on error");
+            }
+            Ok(invalid) => {
+                assert_eq!(refused, invalid.0, "{what}: span {i}: refused lanes");
+                assert_eq!(got == MlabStatus::Ok, invalid.0 == 0, "{what}: span {i}: {got:?}");
+            }
+        }
+    }
+    same(&c.bytes(), &rust_bytes(&r), &format!("{what}: span inserts"));
+    check_resolves(&c, &r, &what);
+
+    // The keyed batch, resumed after each refused fragment, equals per-pixel keyed inserts.
+    for straight in [true, false] {
+        let mut c = c_fb(method, layers, arith, W, H);
+        let mut storage = vec![Row::EMPTY; kind.rows_needed(W, H).unwrap()];
+        let mut r = DynFramebuffer::<A>::new_cleared(kind, &mut storage, W, H).unwrap();
+        let want_stops: Vec<_> = events
+            .iter()
+            .enumerate()
+            .map(|(i, e)| (i, rust_keyed(&mut r, e, straight)))
+            .filter(|&(_, st)| st != MlabStatus::Ok)
+            .collect();
+        let mut got_stops = Vec::new();
+        let mut start = 0;
+        while start < events.len() {
+            let rest = &events[start..];
+            let mut inserted = usize::MAX;
+            // SAFETY: `rest.len()` fragments to read, a size_t to write.
+            let st = unsafe {
+                if straight {
+                    mlab_insert_batch_straight_keyed(&mut c.fb, rest.as_ptr(), rest.len(), &mut inserted)
+                } else {
+                    mlab_insert_batch_premultiplied_keyed(&mut c.fb, rest.as_ptr(), rest.len(), &mut inserted)
+                }
+            };
+            if st == MlabStatus::Ok {
+                assert_eq!(inserted, rest.len());
+                break;
+            }
+            got_stops.push((start + inserted, st));
+            start += inserted + 1;
+        }
+        assert_eq!(got_stops, want_stops, "{what}: keyed batch stops (straight {straight})");
+        same(
+            &c.bytes(),
+            &rust_bytes(&r),
+            &format!("{what}: keyed batch (straight {straight})"),
+        );
+        check_resolves(&c, &r, &what);
+
+        // The keys matter for the default arithmetic, and only for it: the same stream
+        // without keys gives other bytes in Unbiased, the same in Paper.
+        let mut u = c_fb(method, layers, arith, W, H);
+        let unkeyed: Vec<_> = events
+            .iter()
+            .map(|e| MlabPixelFragment {
+                x: e.x,
+                y: e.y,
+                rgba: e.rgba,
+                depth: e.depth,
+            })
+            .collect();
+        let mut start = 0;
+        while start < unkeyed.len() {
+            let rest = &unkeyed[start..];
+            let mut inserted = 0;
+            // SAFETY: as above.
+            let st = unsafe {
+                if straight {
+                    mlab_insert_batch_straight(&mut u.fb, rest.as_ptr(), rest.len(), &mut inserted)
+                } else {
+                    mlab_insert_batch_premultiplied(&mut u.fb, rest.as_ptr(), rest.len(), &mut inserted)
+                }
+            };
+            if st == MlabStatus::Ok {
+                break;
+            }
+            start += inserted + 1;
+        }
+        assert_eq!(
+            u.bytes() == c.bytes(),
+            arith == MLAB_ARITHMETIC_PAPER,
+            "{what}: the keys change the bytes in Unbiased only"
+        );
+    }
+}
+
+#[test]
+fn keyed_inserts_equal_the_rust_api_with_keys() {
+    for method in [MLAB_METHOD_MLAB, MLAB_METHOD_HYBRID] {
+        for layers in 1..=8 {
+            check_keyed::<Unbiased>(method, layers, MLAB_ARITHMETIC_UNBIASED);
+            check_keyed::<Paper>(method, layers, MLAB_ARITHMETIC_PAPER);
+        }
+    }
+}
+
+/// A keyed stream through bands (a band of the whole and two bands of a band, on three
+/// threads; per-pixel, span and batch inserts, coordinates relative to the band) equals the
+/// same stream through the whole C framebuffer, the Rust API's whole `DynFramebuffer`, and
+/// its `bands_mut`, byte for byte: a band keeps the whole framebuffer's pixel ids.
+#[test]
+fn keyed_bands_equal_the_whole_framebuffer_and_the_rust_api() {
+    struct Band(MlabFramebuffer, u32, u32); // the view, its first line, its lines
+    // SAFETY: the band's rows are used by one thread only (the bands do not overlap).
+    unsafe impl Send for Band {}
+    let (w, h) = (W, 9); // bands of 3 lines, 63 pixels: the first ids are not multiples of 8
+    let events: Vec<_> = keyed_stream(77, 3000)
+        .into_iter()
+        .filter(|e| Fragment::straight_rgba(e.rgba, e.depth).is_ok() && e.x < w && e.y < h)
+        .collect();
+    let mut rng = Rng(78);
+    let spans: Vec<_> = (0..60)
+        .map(|_| {
+            let (x, y) = (rng.below(w as u64 - 7) as u32, rng.below(h as u64) as u32);
+            let mut span = keyed_span(&mut rng);
+            for lane in 0..8 {
+                // Valid premultiplied fragments, faint (dithered) in every other lane.
+                let a = if lane % 2 == 0 { 0.03 } else { 0.6 };
+                [span.r[lane], span.g[lane], span.b[lane], span.a[lane]] = [0.5 * a, 0.2 * a, 0.9 * a, a];
+                span.depth[lane] = 0.25 * lane as f32 + (rng.below(100) as f32) / 50.0;
+            }
+            (x, y, span)
+        })
+        .collect();
+    // Per pixel (straight), spans (premultiplied: all valid lanes then), batch (straight),
+    // into `fb` for the lines `first..first + lines`, at coordinates relative to `first`.
+    let feed = |fb: &mut MlabFramebuffer, first: u32, lines: u32| {
+        let inside = |y: u32| (first..first + lines).contains(&y);
+        for e in events.iter().filter(|e| inside(e.y)) {
+            let [r, g, b, a] = e.rgba;
+            // SAFETY: an initialized framebuffer or band, this thread's rows.
+            let st = unsafe { mlab_insert_straight_keyed(fb, e.x, e.y - first, r, g, b, a, e.depth, e.key) };
+            assert_eq!(st, MlabStatus::Ok);
+        }
+        for (x, y, span) in spans.iter().filter(|s| inside(s.1)) {
+            let mut refused = 0xee;
+            // SAFETY: as above.
+            let st = unsafe { mlab_insert_span_premultiplied_keyed(fb, *x, y - first, span, 0xff, &mut refused) };
+            assert_eq!((st, refused), (MlabStatus::Ok, 0));
+        }
+        let batch: Vec<_> = events
+            .iter()
+            .filter(|e| inside(e.y))
+            .map(|e| MlabPixelFragmentKeyed {
+                y: e.y - first,
+                depth: e.depth + 0.5,
+                ..*e
+            })
+            .collect();
+        let mut inserted = 0;
+        // SAFETY: as above.
+        let st = unsafe { mlab_insert_batch_straight_keyed(fb, batch.as_ptr(), batch.len(), &mut inserted) };
+        assert_eq!((st, inserted), (MlabStatus::Ok, batch.len()));
+    };
+    // The same through the Rust API, into a `Framebuffer` (whole or band).
+    fn rust_feed<F: Framebuffer>(
+        fb: &mut F,
+        first: u32,
+        events: &[MlabPixelFragmentKeyed],
+        spans: &[(u32, u32, MlabFragmentSpanKeyed)],
+    ) {
+        let lines = fb.height();
+        let inside = |y: u32| (first..first + lines).contains(&y);
+        for e in events.iter().filter(|e| inside(e.y)) {
+            let f = Fragment::straight_rgba(e.rgba, e.depth).unwrap().with_key(e.key);
+            fb.insert(e.x, e.y - first, &f).unwrap();
+        }
+        for (x, y, span) in spans.iter().filter(|s| inside(s.1)) {
+            let refused = fb.insert_span_fragments(*x, y - first, &keyed_lanes(span), 0xff);
+            assert_eq!(refused.unwrap().0, 0);
+        }
+        for e in events.iter().filter(|e| inside(e.y)) {
+            let f = Fragment::straight_rgba(e.rgba, e.depth + 0.5).unwrap().with_key(e.key);
+            fb.insert(e.x, e.y - first, &f).unwrap();
+        }
+    }
+    for (method, layers, arith) in [
+        (MLAB_METHOD_MLAB, 4, MLAB_ARITHMETIC_UNBIASED),
+        (MLAB_METHOD_HYBRID, 3, MLAB_ARITHMETIC_UNBIASED),
+        (MLAB_METHOD_MLAB, 1, MLAB_ARITHMETIC_UNBIASED),
+        (MLAB_METHOD_HYBRID, 8, MLAB_ARITHMETIC_UNBIASED),
+        (MLAB_METHOD_MLAB, 2, MLAB_ARITHMETIC_PAPER),
+    ] {
+        let what = format!("method {method} layers {layers} arith {arith}");
+        let mut whole = c_fb(method, layers, arith, w, h);
+        feed(&mut whole.fb, 0, h);
+
+        let banded = c_fb(method, layers, arith, w, h);
+        let (mut top, mut rest, mut mid, mut low) = (banded.fb, banded.fb, banded.fb, banded.fb);
+        // SAFETY: initialized framebuffers; the bands are written to structs of their own.
+        unsafe {
+            assert_eq!(mlab_framebuffer_band(&banded.fb, 0, 3, &mut top), MlabStatus::Ok);
+            assert_eq!(mlab_framebuffer_band(&banded.fb, 3, 6, &mut rest), MlabStatus::Ok);
+            assert_eq!(mlab_framebuffer_band(&rest, 0, 3, &mut mid), MlabStatus::Ok);
+            assert_eq!(mlab_framebuffer_band(&rest, 3, 3, &mut low), MlabStatus::Ok);
+        }
+        std::thread::scope(|s| {
+            for band in [Band(top, 0, 3), Band(mid, 3, 3), Band(low, 6, 3)] {
+                let feed = &feed;
+                s.spawn(move || {
+                    let mut band = band;
+                    feed(&mut band.0, band.1, band.2);
+                });
+            }
+        });
+        same(
+            &banded.bytes(),
+            &whole.bytes(),
+            &format!("{what}: C bands against the C whole"),
+        );
+
+        let kind = match method {
+            MLAB_METHOD_MLAB => Layers::Mlab(layers as usize),
+            _ => Layers::Hybrid(layers as usize),
+        };
+        let mut storage = vec![Row::EMPTY; kind.rows_needed(w, h).unwrap()];
+        let mut bands_storage = storage.clone();
+        macro_rules! rust {
+            ($a:ty) => {{
+                let mut r = DynFramebuffer::<$a>::new_cleared(kind, &mut storage, w, h).unwrap();
+                rust_feed(&mut r, 0, &events, &spans);
+                let mut rb = DynFramebuffer::<$a>::new_cleared(kind, &mut bands_storage, w, h).unwrap();
+                for (b, mut band) in rb.bands_mut(3).enumerate() {
+                    rust_feed(&mut band, 3 * b as u32, &events, &spans);
+                }
+                (rust_bytes(&r), rust_bytes(&rb))
+            }};
+        }
+        let (want, want_bands) = if arith == MLAB_ARITHMETIC_UNBIASED {
+            rust!(Unbiased)
+        } else {
+            rust!(Paper)
+        };
+        same(
+            &want_bands,
+            &want,
+            &format!("{what}: Rust bands against the Rust whole"),
+        );
+        same(
+            &whole.bytes(),
+            &want,
+            &format!("{what}: the C whole against the Rust API"),
+        );
+        same(&banded.bytes(), &want, &format!("{what}: C bands against the Rust API"));
+    }
+}

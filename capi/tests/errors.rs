@@ -64,6 +64,15 @@ const SPAN: MlabFragmentSpan = MlabFragmentSpan {
     depth: [1.0; 8],
 };
 
+const SPAN_KEYED: MlabFragmentSpanKeyed = MlabFragmentSpanKeyed {
+    r: [0.5; 8],
+    g: [0.5; 8],
+    b: [0.5; 8],
+    a: [0.5; 8],
+    depth: [1.0; 8],
+    key: [7; 8],
+};
+
 /// Every function that takes a framebuffer, called with `fb`, returns `want`.
 fn every_call_returns(fb: *mut MlabFramebuffer, want: MlabStatus, what: &str) {
     let mut out8 = vec![[0u8; 4]; (W * H) as usize];
@@ -76,6 +85,13 @@ fn every_call_returns(fb: *mut MlabFramebuffer, want: MlabStatus, what: &str) {
         rgba: [0.5; 4],
         depth: 1.0,
     };
+    let keyed = MlabPixelFragmentKeyed {
+        x: 0,
+        y: 0,
+        rgba: [0.5; 4],
+        depth: 1.0,
+        key: 7,
+    };
     let (mut refused, mut inserted, mut band) = (0u8, 0usize, MaybeUninit::uninit());
     // SAFETY: every other pointer is valid; `fb` is what is tested (null, misaligned,
     // uninitialized: each refused before it is used for anything but reading the struct).
@@ -85,16 +101,23 @@ fn every_call_returns(fb: *mut MlabFramebuffer, want: MlabStatus, what: &str) {
             mlab_framebuffer_band(fb, 0, 1, band.as_mut_ptr()),
             mlab_insert_straight(fb, 0, 0, 0.5, 0.5, 0.5, 0.5, 1.0),
             mlab_insert_premultiplied(fb, 0, 0, 0.5, 0.5, 0.5, 0.5, 1.0),
+            mlab_insert_straight_keyed(fb, 0, 0, 0.5, 0.5, 0.5, 0.5, 1.0, 7),
+            mlab_insert_premultiplied_keyed(fb, 0, 0, 0.5, 0.5, 0.5, 0.5, 1.0, 7),
             mlab_insert_span_straight(fb, 0, 0, &SPAN, 1, &mut refused),
             mlab_insert_span_premultiplied(fb, 0, 0, &SPAN, 1, &mut refused),
+            mlab_insert_span_straight_keyed(fb, 0, 0, &SPAN_KEYED, 1, &mut refused),
+            mlab_insert_span_premultiplied_keyed(fb, 0, 0, &SPAN_KEYED, 1, &mut refused),
             mlab_insert_batch_straight(fb, &frag, 1, &mut inserted),
             mlab_insert_batch_premultiplied(fb, &frag, 1, &mut inserted),
+            mlab_insert_batch_straight_keyed(fb, &keyed, 1, &mut inserted),
+            mlab_insert_batch_premultiplied_keyed(fb, &keyed, 1, &mut inserted),
             mlab_resolve_rgba8(fb, OPAQUE, out8.as_mut_ptr().cast(), n),
             mlab_resolve_f32(fb, OPAQUE, out32.as_mut_ptr().cast(), n),
             mlab_resolve_rgba16f(fb, OPAQUE, out16.as_mut_ptr().cast(), n),
         ]
     };
-    assert_eq!(got, [want; 11], "{what}");
+    assert_eq!(got, [want; 17], "{what}");
+    assert_eq!((refused, inserted), (0, 0), "{what}: out-parameters untouched");
     assert!(out8.iter().all(|p| *p == [0; 4]), "{what}: output untouched");
 }
 
@@ -134,6 +157,11 @@ fn every_call_returns_ok(fb: *mut MlabFramebuffer) {
     // SAFETY: an initialized framebuffer.
     assert_eq!(
         unsafe { mlab_insert_straight(fb, 1, 1, 0.5, 0.5, 0.5, 0.5, 1.0) },
+        MlabStatus::Ok
+    );
+    // SAFETY: as above.
+    assert_eq!(
+        unsafe { mlab_insert_straight_keyed(fb, 1, 1, 0.5, 0.5, 0.5, 0.5, 1.0, 3) },
         MlabStatus::Ok
     );
 }
@@ -234,6 +262,8 @@ fn invalid_fragments_are_reported_not_dropped() {
             let mut refused = 0u8;
             let mut span = SPAN;
             (span.r[5], span.g[5], span.b[5], span.a[5], span.depth[5]) = (r, g, b, a, depth);
+            let mut keyed = SPAN_KEYED;
+            (keyed.r[2], keyed.g[2], keyed.b[2], keyed.a[2], keyed.depth[2]) = (r, g, b, a, depth);
             // SAFETY: an initialized framebuffer; valid span and byte.
             unsafe {
                 assert_eq!(mlab_insert_straight(&mut c.fb, 1, 1, r, g, b, a, depth), want);
@@ -244,6 +274,14 @@ fn invalid_fragments_are_reported_not_dropped() {
                 let st = mlab_insert_span_straight(&mut c.fb, 0, 0, &span, 0b0010_0001, &mut refused);
                 assert_eq!((st, refused), (want, 0b0010_0000), "{rgba:?} {depth}");
                 assert_ne!(c.bytes(), before, "lane 0 inserted");
+                mlab_framebuffer_clear(&mut c.fb);
+                // The keyed inserts: the same statuses.
+                assert_eq!(mlab_insert_straight_keyed(&mut c.fb, 1, 1, r, g, b, a, depth, 9), want);
+                assert_eq!(mlab_insert_straight_keyed(&mut c.fb, W, H, r, g, b, a, depth, 9), want);
+                assert_eq!(c.bytes(), before, "nothing inserted");
+                let st = mlab_insert_span_straight_keyed(&mut c.fb, 0, 0, &keyed, 0b0000_0110, &mut refused);
+                assert_eq!((st, refused), (want, 0b0000_0100), "keyed {rgba:?} {depth}");
+                assert_ne!(c.bytes(), before, "lane 1 inserted");
                 mlab_framebuffer_clear(&mut c.fb);
             }
         }
@@ -258,6 +296,19 @@ fn invalid_fragments_are_reported_not_dropped() {
                 mlab_insert_premultiplied(&mut c.fb, 0, 0, 0.9, 0.0, 0.0, 0.1, 1.0),
                 MlabStatus::Ok
             );
+            assert_eq!(
+                mlab_insert_premultiplied_keyed(&mut c.fb, 0, 0, 1.5, 0.0, 0.0, 1.0, 1.0, 1),
+                MlabStatus::ColorAboveOne
+            );
+            assert_eq!(
+                mlab_insert_premultiplied_keyed(&mut c.fb, 0, 0, 0.9, 0.0, 0.0, 0.1, 1.0, 1),
+                MlabStatus::Ok
+            );
+            let mut span = SPAN_KEYED;
+            span.r[3] = 1.5;
+            let mut refused = 0;
+            let st = mlab_insert_span_premultiplied_keyed(&mut c.fb, 0, 0, &span, 0xff, &mut refused);
+            assert_eq!((st, refused), (MlabStatus::ColorAboveOne, 0b1000));
         }
     }
 }
@@ -278,7 +329,19 @@ fn pixels_outside_are_reported() {
                 mlab_insert_premultiplied(&mut c.fb, x, y, 0.5, 0.5, 0.5, 0.5, 1.0),
                 MlabStatus::OutOfBounds
             );
+            assert_eq!(
+                mlab_insert_straight_keyed(&mut c.fb, x, y, 0.5, 0.5, 0.5, 0.5, 1.0, 1),
+                MlabStatus::OutOfBounds
+            );
+            assert_eq!(
+                mlab_insert_premultiplied_keyed(&mut c.fb, x, y, 0.5, 0.5, 0.5, 0.5, 1.0, 1),
+                MlabStatus::OutOfBounds
+            );
         }
+        let st = mlab_insert_span_straight_keyed(&mut c.fb, 6, 0, &SPAN_KEYED, 0x80, &mut refused);
+        assert_eq!((st, refused), (MlabStatus::OutOfBounds, 0xaa));
+        let st = mlab_insert_span_premultiplied_keyed(&mut c.fb, 0, H, &SPAN_KEYED, 1, &mut refused);
+        assert_eq!((st, refused), (MlabStatus::OutOfBounds, 0xaa));
         // Lane 7 of a span at x = 6 is pixel 13, outside a 13-pixel line; with lane 7 off it
         // fits.
         let st = mlab_insert_span_straight(&mut c.fb, 6, 0, &SPAN, 0x80, &mut refused);
@@ -305,6 +368,22 @@ fn pixels_outside_are_reported() {
         // Count 0: nothing to do.
         let st = mlab_insert_batch_straight(&mut c.fb, frags.as_ptr(), 0, &mut inserted);
         assert_eq!((st, inserted), (MlabStatus::Ok, 0));
+        // The keyed batch: the same stops.
+        let keyed = frags.map(|f| MlabPixelFragmentKeyed {
+            x: f.x,
+            y: f.y,
+            rgba: f.rgba,
+            depth: f.depth,
+            key: f.x,
+        });
+        let st = mlab_insert_batch_straight_keyed(&mut c.fb, keyed.as_ptr(), keyed.len(), &mut inserted);
+        assert_eq!((st, inserted), (MlabStatus::OutOfBounds, 2));
+        let mut bad = keyed;
+        bad[1].depth = f32::INFINITY;
+        let st = mlab_insert_batch_premultiplied_keyed(&mut c.fb, bad.as_ptr(), bad.len(), &mut inserted);
+        assert_eq!((st, inserted), (MlabStatus::InfiniteDepth, 1));
+        let st = mlab_insert_batch_premultiplied_keyed(&mut c.fb, null(), 0, &mut inserted);
+        assert_eq!(st, MlabStatus::NullPointer, "null, even with count 0");
     }
 }
 
@@ -360,6 +439,81 @@ fn span_and_batch_pointers_are_checked() {
         );
     }
     assert_eq!(c.bytes(), before);
+}
+
+/// The keyed span and batch inserts check their pointers as the unkeyed ones: null
+/// fragments, out-parameters, fragments off their 4-byte alignment, an overflowing count.
+#[test]
+fn keyed_span_and_batch_pointers_are_checked() {
+    let mut c = c_fb(MLAB_METHOD_MLAB, 4);
+    let before = c.bytes();
+    let (mut refused, mut inserted) = (0xaau8, 77usize);
+    let frag = MlabPixelFragmentKeyed {
+        x: 0,
+        y: 0,
+        rgba: [0.5; 4],
+        depth: 1.0,
+        key: 5,
+    };
+    let mut buf = [0u32; 64];
+    let base = buf.as_mut_ptr().cast::<u8>();
+    let off_span = base.wrapping_add(2).cast::<MlabFragmentSpanKeyed>();
+    let off_frag = base.wrapping_add(1).cast::<MlabPixelFragmentKeyed>();
+    let off_inserted = base.wrapping_add(4).cast::<usize>();
+    assert_eq!(align_of::<MlabFragmentSpanKeyed>(), 4);
+    assert_eq!(align_of::<MlabPixelFragmentKeyed>(), 4);
+    assert_eq!(size_of::<MlabPixelFragmentKeyed>(), 32);
+    assert_eq!(size_of::<MlabFragmentSpanKeyed>(), 192);
+    // SAFETY: an initialized framebuffer; every pointer is null, misaligned (refused) or valid.
+    unsafe {
+        let fb = &mut c.fb as *mut MlabFramebuffer;
+        for (straight, name) in [(true, "straight"), (false, "premultiplied")] {
+            let span = |f: *const MlabFragmentSpanKeyed, r: *mut u8| {
+                if straight {
+                    mlab_insert_span_straight_keyed(fb, 0, 0, f, 1, r)
+                } else {
+                    mlab_insert_span_premultiplied_keyed(fb, 0, 0, f, 1, r)
+                }
+            };
+            let batch = |f: *const MlabPixelFragmentKeyed, n: usize, i: *mut usize| {
+                if straight {
+                    mlab_insert_batch_straight_keyed(fb, f, n, i)
+                } else {
+                    mlab_insert_batch_premultiplied_keyed(fb, f, n, i)
+                }
+            };
+            assert_eq!(span(null(), &mut refused), MlabStatus::NullPointer, "{name}");
+            assert_eq!(span(&SPAN_KEYED, null_mut()), MlabStatus::NullPointer, "{name}");
+            assert_eq!(span(off_span, &mut refused), MlabStatus::Misaligned, "{name}");
+            assert_eq!(batch(null(), 1, &mut inserted), MlabStatus::NullPointer, "{name}");
+            assert_eq!(batch(&frag, 1, null_mut()), MlabStatus::NullPointer, "{name}");
+            assert_eq!(batch(off_frag, 1, &mut inserted), MlabStatus::Misaligned, "{name}");
+            assert_eq!(batch(&frag, 1, off_inserted), MlabStatus::Misaligned, "{name}");
+            assert_eq!(
+                batch(&frag, usize::MAX / 16, &mut inserted),
+                MlabStatus::SizeOverflow,
+                "{name}"
+            );
+        }
+        // The framebuffer pointer itself: null and misaligned (`every_call_returns` covers
+        // the rest).
+        let off_fb = base.wrapping_add(4).cast::<MlabFramebuffer>();
+        for f in [null_mut(), off_fb] {
+            let want = if f.is_null() {
+                MlabStatus::NullPointer
+            } else {
+                MlabStatus::Misaligned
+            };
+            assert_eq!(mlab_insert_straight_keyed(f, 0, 0, 0.5, 0.5, 0.5, 0.5, 1.0, 1), want);
+            assert_eq!(
+                mlab_insert_span_straight_keyed(f, 0, 0, &SPAN_KEYED, 1, &mut refused),
+                want
+            );
+            assert_eq!(mlab_insert_batch_straight_keyed(f, &frag, 1, &mut inserted), want);
+        }
+    }
+    assert_eq!((refused, inserted), (0xaa, 77), "out-parameters untouched");
+    assert_eq!(c.bytes(), before, "nothing inserted");
 }
 
 #[test]
