@@ -11,6 +11,11 @@
  * The fragments are made with integer arithmetic and one correctly rounded division, so the
  * same scene written in Rust (capi/tests/triangles.rs) gives the same floats, and the files
  * must equal that test's byte for byte (capi/ci.sh compares them).
+ *
+ * Each fragment carries its triangle's index as its stable key (mlab_insert_straight_keyed):
+ * the id of the primitive, unique in the frame and the same in every frame, so that the
+ * default arithmetic rounds it the same way in every frame while the camera moves. A
+ * renderer with several draws mixes the draw or instance id into it.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -54,8 +59,9 @@ static int64_t edge(const Triangle *t, int i, int64_t px, int64_t py) {
     return (int64_t)(t->x[j] - t->x[i]) * (py - t->y[i]) - (int64_t)(t->y[j] - t->y[i]) * (px - t->x[i]);
 }
 
-/* Every pixel whose center is inside (either winding) gets one fragment. */
-static int draw(MlabFramebuffer *fb, const Triangle *t) {
+/* Every pixel whose center is inside (either winding) gets one fragment, keyed by the
+ * triangle's index. */
+static int draw(MlabFramebuffer *fb, const Triangle *t, uint32_t key) {
     for (uint32_t y = 0; y < HEIGHT; y++) {
         for (uint32_t x = 0; x < WIDTH; x++) {
             int64_t px = 16 * (int64_t)x + 8, py = 16 * (int64_t)y + 8;
@@ -65,8 +71,9 @@ static int draw(MlabFramebuffer *fb, const Triangle *t) {
                 continue;
             }
             float depth = (float)(t->z0 + t->dzdx * (int32_t)x + t->dzdy * (int32_t)y) / 256.0f;
-            MlabStatus st = mlab_insert_straight(fb, x, y, t->rgb[0], t->rgb[1], t->rgb[2], t->alpha, depth);
-            if (failed(st, "mlab_insert_straight")) {
+            MlabStatus st =
+                mlab_insert_straight_keyed(fb, x, y, t->rgb[0], t->rgb[1], t->rgb[2], t->alpha, depth, key);
+            if (failed(st, "mlab_insert_straight_keyed")) {
                 return 1;
             }
         }
@@ -87,7 +94,7 @@ static int render(MlabMethod method, uint32_t layers, MlabArithmetic arithmetic,
     err = err || failed(mlab_framebuffer_init(&fb, method, layers, arithmetic, storage, rows, WIDTH, HEIGHT),
                         "mlab_framebuffer_init");
     for (size_t i = 0; !err && i < sizeof SCENE / sizeof SCENE[0]; i++) {
-        err = draw(&fb, &SCENE[i]);
+        err = draw(&fb, &SCENE[i], (uint32_t)i);
     }
     MlabBackground white = {MLAB_BACKGROUND_OPAQUE, {1.0f, 1.0f, 1.0f}};
     err = err || failed(mlab_resolve_rgba8(&fb, white, rgba, (size_t)WIDTH * HEIGHT), "mlab_resolve_rgba8");

@@ -2,7 +2,8 @@
 //! (`DynFramebuffer`): the PPM of every method, size and arithmetic, which the C program must
 //! reproduce byte for byte. Here the same stream also goes through the C ABI (from Rust) and
 //! must give the same bytes; with `MLAB_CAPI_PPM_DIR` set, the Rust API's files are written
-//! there for `capi/ci.sh` to compare with the C program's (`cmp`).
+//! there for `capi/ci.sh` to compare with the C program's (`cmp`). Every fragment carries its
+//! triangle's index as its stable key (`Fragment::with_key`, `mlab_insert_straight_keyed`).
 
 use mlab::glam::Vec3;
 use mlab::{Arithmetic, Background, DynFramebuffer, Fragment, Framebuffer, Layers, Paper, Row, Unbiased};
@@ -46,10 +47,11 @@ const SCENE: [Triangle; 8] = [
     t([1536, 1536, 0], [0, 1024, 1024], 6000, -8, -8, [0.05, 0.05, 0.05], 0.8),
 ];
 
-/// The fragments of the scene in submission order: `(x, y, straight [r, g, b, a], depth)`.
-fn fragments() -> Vec<(u32, u32, [f32; 4], f32)> {
+/// The fragments of the scene in submission order: `(x, y, straight [r, g, b, a], depth,
+/// key)`, the key the triangle's index.
+fn fragments() -> Vec<(u32, u32, [f32; 4], f32, u32)> {
     let mut out = Vec::new();
-    for t in &SCENE {
+    for (key, t) in (0u32..).zip(&SCENE) {
         let edge = |i: usize, px: i64, py: i64| {
             let j = (i + 1) % 3;
             (t.x[j] - t.x[i]) as i64 * (py - t.y[i] as i64) - (t.y[j] - t.y[i]) as i64 * (px - t.x[i] as i64)
@@ -61,7 +63,7 @@ fn fragments() -> Vec<(u32, u32, [f32; 4], f32)> {
                 if e.iter().all(|&v| v >= 0) || e.iter().all(|&v| v <= 0) {
                     let depth = (t.z0 + t.dzdx * x as i32 + t.dzdy * y as i32) as f32 / 256.0;
                     let [r, g, b] = t.rgb;
-                    out.push((x, y, [r, g, b, t.alpha], depth));
+                    out.push((x, y, [r, g, b, t.alpha], depth, key));
                 }
             }
         }
@@ -79,8 +81,9 @@ fn ppm(rgba: &[[u8; 4]]) -> Vec<u8> {
 fn rust_image<A: Arithmetic>(layers: Layers) -> Vec<[u8; 4]> {
     let mut storage = vec![Row::EMPTY; layers.rows_needed(WIDTH, HEIGHT).unwrap()];
     let mut fb = DynFramebuffer::<A>::new_cleared(layers, &mut storage, WIDTH, HEIGHT).unwrap();
-    for (x, y, rgba, depth) in fragments() {
-        fb.insert(x, y, &Fragment::straight_rgba(rgba, depth).unwrap()).unwrap();
+    for (x, y, rgba, depth, key) in fragments() {
+        let f = Fragment::straight_rgba(rgba, depth).unwrap().with_key(key);
+        fb.insert(x, y, &f).unwrap();
     }
     let mut out = vec![[0; 4]; (WIDTH * HEIGHT) as usize];
     fb.resolve_rgba8(&mut out, Background::Opaque(Vec3::ONE)).unwrap();
@@ -111,8 +114,11 @@ fn c_image(method: MlabMethod, layers: u32, arith: MlabArithmetic) -> Vec<[u8; 4
         );
         assert_eq!(st, MlabStatus::Ok);
         let fb = fb.as_mut_ptr();
-        for (x, y, [r, g, b, a], depth) in fragments() {
-            assert_eq!(mlab_insert_straight(fb, x, y, r, g, b, a, depth), MlabStatus::Ok);
+        for (x, y, [r, g, b, a], depth, key) in fragments() {
+            assert_eq!(
+                mlab_insert_straight_keyed(fb, x, y, r, g, b, a, depth, key),
+                MlabStatus::Ok
+            );
         }
         let white = MlabBackground {
             kind: MLAB_BACKGROUND_OPAQUE,
