@@ -9,18 +9,21 @@
 //! `MlabFramebuffer` is a small `#[repr(C)]` struct (32 bytes on 64-bit targets) that the
 //! caller declares (on the stack, inside its own renderer struct) and
 //! `mlab_framebuffer_init` fills: a pointer to the storage, its length in rows, the size,
-//! the method and the arithmetic. It owns nothing; the rows are the caller's
-//! (`mlab_rows_needed` says how many). Chosen over an opaque heap handle because the kernel
-//! allocates nothing and this crate does not either: no `malloc` inside, no `free` to
-//! forget, nothing to leak, and the state can live wherever the caller's other state lives.
-//! It is a plain view: copying it is allowed (the copies are views of the same rows).
+//! the method and the arithmetic, and for a band (`mlab_framebuffer_band`) the id of its
+//! first pixel in the whole framebuffer, which the dithers hash. It owns nothing; the rows
+//! are the caller's (`mlab_rows_needed` says how many). Chosen over an opaque heap handle
+//! because the kernel allocates nothing and this crate does not either: no `malloc` inside,
+//! no `free` to forget, nothing to leak, and the state can live wherever the caller's other
+//! state lives. It is a plain view: copying it is allowed (the copies are views of the same
+//! rows).
 //!
 //! Every call rebuilds the kernel's borrowed view (the span grid that `DynFramebuffer` would
-//! hold, `SpanFramebuffer<M, A>` or `HybridSpanFramebuffer<K, A>` over `&mut [Row]`) from the
-//! pointer and length for the duration of the call, and drops it before returning: no Rust
-//! reference outlives a call, so the only lifetime rule is the C
-//! one (the rows stay valid, and are not used by anything else during a call). What that
-//! rebuild costs per insert is measured in `docs/performance.md` ("C API").
+//! hold, `SpanFramebuffer<M, A>` or `HybridSpanFramebuffer<K, A>` over `&mut [Row]`, with the
+//! band's first pixel id: `Grid::with_first_pixel`) from the pointer and length for the
+//! duration of the call, and drops it before returning: no Rust reference outlives a call,
+//! so the only lifetime rule is the C one (the rows stay valid, and are not used by anything
+//! else during a call). What that rebuild costs per insert is measured in
+//! `docs/performance.md` ("C API").
 //!
 //! # What is checked, and what the caller guarantees
 //!
