@@ -300,7 +300,6 @@ fn a_band_rebuilt_with_its_first_pixel_inserts_the_whole_framebuffers_bytes() {
         assert_eq!(fb.insert_span_straight(4, 4, &lanes, 0xff).unwrap().0, 0);
         assert_eq!(bottom.insert_span_straight(4, 4 - split, &lanes, 0xff).unwrap().0, 0);
         assert_eq!(rbottom.insert_span_straight(4, 4 - split, &lanes, 0xff).unwrap().0, 0);
-        drop((top, bottom, rtop, rbottom, fb));
         assert_eq!(split_rows, whole);
         assert_eq!(rebuilt, whole);
         // The same band from its rows without the first pixel id: other dithers.
@@ -309,7 +308,6 @@ fn a_band_rebuilt_with_its_first_pixel_inserts_the_whole_framebuffers_bytes() {
         for &(x, y, f) in frags.iter().filter(|&&(_, y, _)| y >= split) {
             band.insert(x, y - split, &f).unwrap();
         }
-        drop(band);
         assert_ne!(other[..], whole[at..]);
     }
     check::<Mlab<4>, Spans>();
