@@ -25,13 +25,17 @@ impl Builder {
     }
 
     /// Add a primitive covering the box `[x0, x1] x [y0, y1]` (in pixels): the pixels whose
-    /// centres a scan of that box visits, clamped to the frame.
+    /// centres a scan of that box visits, clamped to the frame. Its id is its number in the
+    /// list: every scene builds the same list of primitives whatever the frame size (the
+    /// boxes are clamped, never dropped), so an id names the same primitive at every size.
     fn push(&mut self, (x0, y0, x1, y1): (f32, f32, f32, f32), kind: Kind) {
         let xa = (x0.floor().max(0.0)) as u32;
         let ya = (y0.floor().max(0.0)) as u32;
         let xb = (x1.ceil().min(self.w as f32).max(0.0)) as u32;
         let yb = (y1.ceil().min(self.h as f32).max(0.0)) as u32;
+        let id = u32::try_from(self.prims.len()).unwrap_or(u32::MAX);
         self.prims.push(Primitive {
+            id,
             x0: xa,
             y0: ya,
             x1: xb,

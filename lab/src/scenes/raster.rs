@@ -40,12 +40,13 @@ pub type SpanLanes = FragmentLanes;
 
 /// Flattening spans back into fragments (the stream of the quality tables).
 pub trait PushFrags {
-    /// Append the lanes set in `mask` of the span at `(x, y)` as fragments, left to right.
-    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, out: &mut Vec<Frag>);
+    /// Append the lanes set in `mask` of the span at `(x, y)` as fragments of primitive
+    /// `prim`, left to right.
+    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, prim: u32, out: &mut Vec<Frag>);
 }
 
 impl PushFrags for FragmentLanes {
-    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, out: &mut Vec<Frag>) {
+    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, prim: u32, out: &mut Vec<Frag>) {
         for i in 0..LANES {
             if mask & (1 << i) != 0 {
                 out.push(Frag {
@@ -53,6 +54,7 @@ impl PushFrags for FragmentLanes {
                     depth: self.depth[i],
                     color: [self.color[0][i], self.color[1][i], self.color[2][i]],
                     alpha: self.alpha[i],
+                    prim,
                 });
             }
         }

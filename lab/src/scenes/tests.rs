@@ -241,6 +241,7 @@ fn raster_is_the_scalar_raster_span_by_span() {
         let (x0, x1) = (rng.below(w as usize) as u32, rng.below(w as usize + 1) as u32);
         let (y0, y1) = (rng.below(h as usize) as u32, rng.below(h as usize + 1) as u32);
         let p = Primitive {
+            id: n,
             x0: x0.min(x1),
             y0: y0.min(y1),
             x1: x0.max(x1),
@@ -345,6 +346,7 @@ fn line_ranges_hold_every_covered_pixel() {
         };
         covered += check(
             &Primitive {
+                id: n,
                 x0: 0,
                 y0: 0,
                 x1: 40,
@@ -364,4 +366,30 @@ fn line_ranges_hold_every_covered_pixel() {
         }
     }
     assert!(covered > 1_000_000, "{covered}");
+}
+
+/// Every scene numbers its primitives 0, 1, 2, ... in submission order, and each fragment of
+/// its stream carries the number of the primitive that emitted it.
+#[test]
+fn fragments_carry_their_primitives_ids() {
+    for scene in Scene::ALL {
+        let (w, h) = (61, 35);
+        let prims = scene.primitives(w, h, 5);
+        assert!(
+            prims.prims.iter().enumerate().all(|(i, p)| p.id == i as u32),
+            "{}: ids are not the list's numbering",
+            scene.name()
+        );
+        let s = prims.stream();
+        assert!(s.frags.windows(2).all(|f| f[0].prim <= f[1].prim), "{}", scene.name());
+        let mut counts = vec![0usize; prims.prims.len()];
+        for f in &s.frags {
+            counts[f.prim as usize] += 1;
+        }
+        for p in &prims.prims {
+            let mut n = 0;
+            p.raster(Clip::frame(w, h), &mut |_, _, mask, _| n += mask.count_ones() as usize);
+            assert_eq!(counts[p.id as usize], n, "{}: primitive {}", scene.name(), p.id);
+        }
+    }
 }
