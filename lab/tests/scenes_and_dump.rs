@@ -15,7 +15,7 @@ const PINNED: [(Scene, u64); 7] = [
     (Scene::Hair, 0xa23ce7fc0ea5f5d5),
     (Scene::Particles, 0x70c15829efaa36c4),
     (Scene::Forest, 0xa505519f0b156882),
-    (Scene::Teapots, 0xc18b62898710c877),
+    (Scene::Teapots, 0x0a77c8d02b07a3e9),
     (Scene::Glass, 0x336d622a304f8eec),
     (Scene::Fog, 0xdc2435e4ee916147),
     (Scene::Splats, 0xd94bb4abc1a7f19a),
