@@ -44,7 +44,7 @@ struct Step {
 fn fragment_row(rng: &mut Rng, depth: f32) -> Row {
     let alpha = 0.1 + 0.8 * rng.unit();
     let c = mlab::glam::Vec3::new(rng.unit(), rng.unit(), rng.unit());
-    <mlab::Paper as mlab::Arithmetic>::quantize(&mlab::Fragment::straight(c, alpha, depth).expect("valid"))
+    <mlab::Paper as mlab::Arithmetic>::quantize(&mlab::Fragment::straight(c, alpha, depth).expect("valid"), 0)
 }
 
 fn random_stream(spans: usize) -> Vec<Step> {

@@ -40,8 +40,6 @@
 //! [`PaperTail`]: crate::hybrid::PaperTail
 //! [`Tail`]: crate::hybrid::Tail
 
-use core::hint::select_unpredictable;
-
 use crate::fragment::Fragment;
 use crate::row::Row;
 use crate::tail::{PaperTail, Tail, TailFormat};
@@ -78,23 +76,14 @@ pub trait Arithmetic:
     /// The HT tail of this arithmetic.
     type Tail: TailFormat;
 
-    /// Merge two neighbouring rows (Eq. 7-8), `front` nearer: see [`crate::mlab::insert_with`] and the [module docs](self).
-    fn merge(front: Row, back: Row) -> Row;
+    /// Merge two neighbouring rows (Eq. 7-8), `front` nearer, during the insert of a
+    /// fragment whose hash is `h` ([`fragment_hash`]; [`Paper`] ignores it): see
+    /// [`crate::mlab::insert_hashed`] and the [module docs](self).
+    fn merge(front: Row, back: Row, h: u32) -> Row;
 
-    /// Quantize a validated fragment into a row.
-    fn quantize(fragment: &Fragment) -> Row;
-
-    /// The last step of Listing 1 on one pixel: `merge(a, b)` if `a_first`, else
-    /// `merge(b, a)`. The same bytes as selecting then merging; [`Unbiased`] hashes its
-    /// dither from the pair before the choice (the hash is symmetric), which takes the hash
-    /// off the insert's dependency chain.
-    #[doc(hidden)]
-    #[inline(always)]
-    fn merge_pair(a_first: bool, a: Row, b: Row) -> Row {
-        // Branchless, as Listing 1's swaps: the depth order of an unsorted stream is random.
-        let (front, back) = (select_unpredictable(a_first, a, b), select_unpredictable(a_first, b, a));
-        Self::merge(front, back)
-    }
+    /// Quantize a validated fragment of hash `h` ([`Fragment::hash`]; [`Paper`] ignores it)
+    /// into a row.
+    fn quantize(fragment: &Fragment, h: u32) -> Row;
 }
 
 /// The paper's arithmetic: products rounded to nearest, fragments rounded to nearest, the
@@ -114,9 +103,10 @@ impl Arithmetic for Paper {
     const KIND: Kind = Kind::Paper;
     type Tail = PaperTail;
 
-    /// `A = A_front + round(A_back * T_front / 255)` (saturating), `T = round(T_front * T_back / 255)`.
+    /// `A = A_front + round(A_back * T_front / 255)` (saturating), `T = round(T_front * T_back / 255)`,
+    /// `z = z_front`.
     #[inline(always)]
-    fn merge(front: Row, back: Row) -> Row {
+    fn merge(front: Row, back: Row, _h: u32) -> Row {
         let [ar, ag, ab, at] = front.rgbt();
         let [br, bg, bb, bt] = back.rgbt();
         // `min` rather than `u8::saturating_add`: the same value, without a branch.
@@ -125,7 +115,7 @@ impl Arithmetic for Paper {
     }
 
     #[inline(always)]
-    fn quantize(fragment: &Fragment) -> Row {
+    fn quantize(fragment: &Fragment, _h: u32) -> Row {
         fragment.row_nearest()
     }
 }
@@ -135,25 +125,21 @@ impl Arithmetic for Unbiased {
     const KIND: Kind = Kind::Unbiased;
     type Tail = Tail;
 
-    /// With `d = merge_dither(front, back)`:
+    /// With the merge dither `d = ((h & 0xffff) * 255) >> 16` ([`merge_dither`]):
     /// `T = floor((T_front * T_back + d) / 255)`,
-    /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255.
+    /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255,
+    /// and `z` the opacity-weighted depth of the two rows ([`centroid_depth`]).
     #[inline(always)]
-    fn merge(front: Row, back: Row) -> Row {
-        unbiased_merge(front, back, merge_dither(front, back))
-    }
-
-    #[inline(always)]
-    fn merge_pair(a_first: bool, a: Row, b: Row) -> Row {
-        let d = merge_dither(a, b); // = merge_dither(b, a): the hash is symmetric
-        // Branchless, as Listing 1's swaps: the depth order of an unsorted stream is random.
-        let (front, back) = (select_unpredictable(a_first, a, b), select_unpredictable(a_first, b, a));
-        unbiased_merge(front, back, d)
+    fn merge(front: Row, back: Row, h: u32) -> Row {
+        let merged = unbiased_merge(front, back, merge_dither(h));
+        let [word0, _] = merged.words();
+        Row::from_words([word0, centroid_depth(front, back)])
     }
 
     /// To nearest, as the paper's ([`Paper::quantize`](Arithmetic::quantize)), except for faint fragments
     /// (`alpha * 255 < 16`, where half a unit of rounding is more than 3 % of the value),
-    /// which are quantized with the fragment dither (`docs/layout.md`).
+    /// which are quantized with the fragment dither `u = ((h >> 24) + 0.5) / 256`
+    /// ([`fragment_dither`]).
     ///
     /// Why only those (measured with `oit-lab faint`, 3 seeds, `docs/quality.md`): dithering
     /// every fragment doubles the quantization noise, which cost up to 1.1 dB on scenes that
@@ -162,10 +148,10 @@ impl Arithmetic for Unbiased {
     /// round down more often than up). Dithering the faint ones removes that bias and keeps the
     /// other scenes within 0.4 dB of the paper's rounding.
     #[inline(always)]
-    fn quantize(fragment: &Fragment) -> Row {
+    fn quantize(fragment: &Fragment, h: u32) -> Row {
         if fragment.alpha() * 255.0 < FAINT_BYTES {
             let c = fragment.color();
-            quantize_dithered([c.x, c.y, c.z], fragment.alpha(), fragment.depth())
+            quantize_dithered([c.x, c.y, c.z], fragment.alpha(), fragment.depth(), fragment_dither(h))
         } else {
             fragment.row_nearest()
         }
@@ -207,43 +193,112 @@ fn unbiased_merge(front: Row, back: Row, d: u32) -> Row {
     Row::from_words([word0 as u32, f1])
 }
 
-/// The multiplier of the 16-bit mix (odd, so the mix is a bijection of the folded bits).
-pub(crate) const MIX_K: u32 = 0x6a09;
-
-/// The 16-bit mix shared by both dithers: `x` folded to 16 bits and multiplied modulo 2^16
-/// (a multiplicative hash, whose high bits depend on every folded bit). A shader or a SIMD
-/// unit with 16-bit lanes gets the same bits; the dithers use only the high bits.
-#[inline(always)]
-pub(crate) const fn mix16(x: u32) -> u32 {
-    (((x ^ (x >> 16)) & 0xffff) * MIX_K) & 0xffff
-}
-
-/// The dither of a merge, in `0..=254`: a hash of all 16 bytes of the two rows.
+/// The 32-bit integer hash `lowbias32` (Chris Wellons, "Prospecting for Hash Functions",
+/// 2018: the constants of his `lowbias32`), a bijection of `u32`:
 ///
 /// ```text
-/// x = front.word0 ^ front.word1 ^ back.word0 ^ back.word1        (Row::words)
-/// s = mix16(x)                                                   (see mix16)
-/// d = (s * 255) >> 16
+/// x ^= x >> 16;  x *= 0x7feb352d;  x ^= x >> 15;  x *= 0x846ca68b;  x ^= x >> 16
 /// ```
 ///
-/// Over uniformly distributed `s`, each `d` in `0..=254` has probability 257/65536 or
-/// 258/65536 (one value), so `E[floor((p + d) / 255)]` is within `1/65536` of `p / 255`.
+/// (multiplications modulo 2^32). Used by [`fragment_hash`].
 #[inline(always)]
-pub(crate) const fn merge_dither(front: Row, back: Row) -> u32 {
-    let [f0, f1] = front.words();
-    let [b0, b1] = back.words();
-    (mix16(f0 ^ f1 ^ b0 ^ b1) * 255) >> 16
+#[must_use]
+pub const fn lowbias32(x: u32) -> u32 {
+    let x = (x ^ (x >> 16)).wrapping_mul(0x7feb_352d);
+    let x = (x ^ (x >> 15)).wrapping_mul(0x846c_a68b);
+    x ^ (x >> 16)
 }
 
-/// The dither of fragment quantization: `u = (h + 0.5) / 256` with `h` in `0..=255`, a
-/// hash of the fragment's f32 bits (`h = mix16(bits(R) ^ bits(G) ^ bits(B) ^ bits(alpha)
-/// ^ bits(depth)) >> 8`). `u` lies in `[1/512, 511/512]`, so a value that is exactly a byte
-/// (`k / 255`, up to the f32 error of `v * 255`) quantizes to that byte, and
-/// `E[floor(v * 255 + u)]` is within `1/512` of `v * 255`.
+/// The hash of a fragment in a pixel, which seeds both of [`Unbiased`]'s dithers:
+/// `h = lowbias32(key ^ lowbias32(pixel))`.
+///
+/// `key` is the fragment's stable key ([`Fragment::with_key`]: the primitive's id, the same
+/// in every frame) or, without one, its content key ([`Fragment::hash`]); `pixel` is the
+/// pixel's id (`first line's pixel + y * width + x` in a framebuffer, `docs/layout.md`;
+/// whatever id the caller picks for a [`BlendingArray`](crate::BlendingArray), such as a
+/// pixel or ray index). With a stable key and pixel, the same fragment is rounded the same
+/// way in every frame, whatever its depth does: a camera move does not re-roll the dither.
 #[inline(always)]
-pub(crate) fn fragment_dither(color: [f32; 3], alpha: f32, depth: f32) -> f32 {
-    let x = color[0].to_bits() ^ color[1].to_bits() ^ color[2].to_bits() ^ alpha.to_bits() ^ depth.to_bits();
-    ((mix16(x) >> 8) as f32 + 0.5) * (1.0 / 256.0)
+#[must_use]
+pub const fn fragment_hash(key: u32, pixel: u32) -> u32 {
+    lowbias32(key ^ lowbias32(pixel))
+}
+
+/// The dither of a merge, in `0..=254`, from the inserted fragment's hash `h`:
+/// `d = ((h & 0xffff) * 255) >> 16`.
+///
+/// Over uniformly distributed `h & 0xffff`, each `d` in `0..=254` has probability 257/65536
+/// or 258/65536 (one value), so `E[floor((p + d) / 255)]` is within `1/65536` of `p / 255`.
+#[inline(always)]
+pub(crate) const fn merge_dither(h: u32) -> u32 {
+    ((h & 0xffff) * 255) >> 16
+}
+
+/// The dither of fragment quantization: `u = ((h >> 24) + 0.5) / 256`, from the fragment's
+/// hash `h`. `u` lies in `[1/512, 511/512]`, so a value that is exactly a byte (`k / 255`,
+/// up to the f32 error of `v * 255`) quantizes to that byte, and `E[floor(v * 255 + u)]` is
+/// within `1/512` of `v * 255`.
+#[inline(always)]
+pub(crate) fn fragment_dither(h: u32) -> f32 {
+    ((h >> 24) as f32 + 0.5) * (1.0 / 256.0)
+}
+
+/// Transmittance byte of the front row from which [`Unbiased`]'s merge moves the depth
+/// toward the back row's ([`centroid_depth`]): a front row at least this transparent.
+pub(crate) const CENTROID_MIN_T: u32 = 160;
+
+/// The weight of the back row in the depth of a merge, in `0..=65535` (`65535` = all of
+/// it): its share of the merged opacity, `65535 * cb / (af + cb)` rounded down, with
+/// `af = 255 * (255 - T_front)` and `cb = (255 - T_back) * T_front` (the opacities of the
+/// front row and of the back row seen through it, times 65025). 0 when `cb = 0` (an opaque
+/// front, an empty or transparent back) and when `T_front < 160`.
+///
+/// ```text
+/// p  = T_front * T_back
+/// cb = 255 * T_front - p           // = (255 - T_back) * T_front
+/// w  = T_front >= 160 && cb > 0 ? floor(65535 * cb / (65025 - p)) : 0
+/// ```
+#[inline(always)]
+pub(crate) const fn centroid_weight(t_front: u32, t_back: u32) -> u32 {
+    let p = t_front * t_back;
+    let cb = 255 * t_front - p;
+    // `65025 - p` is 0 only when both are 255, where `cb` is 0 too.
+    let q = (65535 * cb) / if p == 65025 { 1 } else { 65025 - p };
+    if t_front >= CENTROID_MIN_T { q } else { 0 }
+}
+
+/// The order-preserving key of an f32's bits, as a signed integer: `bits` for a positive
+/// sign, the low 31 bits flipped for a negative one. `a <= b` in IEEE order (not NaN) iff
+/// `key(a) <= key(b)` (`-0.0` just below `+0.0`). Its own inverse.
+#[inline(always)]
+#[expect(clippy::cast_possible_wrap, clippy::cast_sign_loss, reason = "bit reinterpretation")]
+pub(crate) const fn depth_key(bits: u32) -> i32 {
+    (bits ^ (((bits as i32) >> 31) as u32 & 0x7fff_ffff)) as i32
+}
+
+/// The depth of [`Unbiased`]'s merge: the opacity-weighted depth of the two rows, moved from
+/// `z_front` toward `z_back` by the back row's weight ([`centroid_weight`]), in integers on
+/// the order-preserving keys of the depths ([`depth_key`]):
+///
+/// ```text
+/// kf = key(z_front), kb = key(z_back)                 // signed
+/// z  = kb > kf ? key^-1(kf + floor((kb - kf) * w / 65536)) : z_front
+/// ```
+///
+/// (`kb - kf` as an unsigned 32-bit difference; `floor(diff * w / 65536)` is
+/// `(diff >> 16) * w + (((diff & 0xffff) * w) >> 16)` in 32 bits.) The depth stays in
+/// `[z_front, z_back]`, so rows stay sorted; it is `z_front` bit for bit when `w = 0` (an
+/// opaque front, an empty back) or when the back row is not behind.
+#[inline(always)]
+#[expect(clippy::cast_possible_wrap, clippy::cast_sign_loss, reason = "bit reinterpretation")]
+pub(crate) const fn centroid_depth(front: Row, back: Row) -> u32 {
+    let [f0, zf] = front.words();
+    let [b0, zb] = back.words();
+    let w = centroid_weight(f0 >> 24, b0 >> 24);
+    let (kf, kb) = (depth_key(zf), depth_key(zb));
+    let diff = if kb > kf { kb.wrapping_sub(kf) as u32 } else { 0 };
+    let step = (diff >> 16) * w + (((diff & 0xffff) * w) >> 16);
+    depth_key(kf.wrapping_add(step as i32) as u32) as u32
 }
 
 /// A byte from a value in `[0, 1]` and a dither `u` in `(0, 1)`: `floor(v * 255 + u)` in f32
@@ -263,14 +318,13 @@ pub(crate) fn quantize_with_dither(v: f32, u: f32) -> u8 {
 pub(crate) const FAINT_BYTES: f32 = 16.0;
 
 /// A dithered quantization of a validated fragment (premultiplied color, alpha, depth):
-/// every channel and alpha with the same dither ([`fragment_dither`]), so that a color that
+/// every channel and alpha with the same dither `u` ([`fragment_dither`]), so that a color that
 /// does not exceed alpha still gives `color byte <= 255 - T byte`. Unbiased on average over
 /// the dither, at twice the noise of rounding to nearest; [`Unbiased`] uses it for faint
 /// fragments only. For many identical faint fragments, rounding to nearest is off in the
 /// same direction every time (`tests/unbiased.rs`).
 #[inline(always)]
-pub(crate) fn quantize_dithered(color: [f32; 3], alpha: f32, depth: f32) -> Row {
-    let u = fragment_dither(color, alpha, depth);
+pub(crate) fn quantize_dithered(color: [f32; 3], alpha: f32, depth: f32, u: f32) -> Row {
     Row::new(
         color.map(|c| quantize_with_dither(c, u)),
         255 - quantize_with_dither(alpha, u),
@@ -348,16 +402,134 @@ mod tests {
             let b = x.to_le_bytes();
             let front = Row::new([b[0], b[1], b[2]], b[3], (x >> 7) as f32);
             let back = Row::new([b[1], b[3], b[0]], b[2], (x >> 5) as f32 + 1.0);
+            let h = lowbias32(x);
             // Empty row behind: identity.
-            assert_eq!(Unbiased::merge(front, Row::EMPTY), front);
+            assert_eq!(Unbiased::merge(front, Row::EMPTY, h), front);
             // Opaque front: nothing behind shows.
             let opaque = Row::new(front.color(), 0, front.depth());
-            assert_eq!(Unbiased::merge(opaque, back), opaque);
+            assert_eq!(Unbiased::merge(opaque, back, h), opaque);
             // Opaque back: opaque result.
             assert_eq!(
-                Unbiased::merge(front, Row::new(back.color(), 0, 2.0)).transmittance(),
+                Unbiased::merge(front, Row::new(back.color(), 0, 2.0), h).transmittance(),
                 0
             );
         }
+    }
+
+    /// `lowbias32` on values published with it (Wellons' `hash-prospector` README lists
+    /// its bias, not values: these were computed from the formula by hand-checked steps) and
+    /// its bijectivity on a sample.
+    #[test]
+    fn lowbias32_is_the_formula() {
+        assert_eq!(lowbias32(0), 0);
+        let by_steps = |x: u32| {
+            let mut x = x;
+            x ^= x >> 16;
+            x = x.wrapping_mul(0x7feb_352d);
+            x ^= x >> 15;
+            x = x.wrapping_mul(0x846c_a68b);
+            x ^ (x >> 16)
+        };
+        let mut x = 1u32;
+        for _ in 0..10_000 {
+            assert_eq!(lowbias32(x), by_steps(x));
+            x = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+        }
+        assert_eq!(fragment_hash(7, 3), lowbias32(7 ^ lowbias32(3)));
+    }
+
+    /// The centroid weight against its definition in 64-bit arithmetic, for every pair of
+    /// transmittance bytes: in `0..=65535`, 0 below the threshold and where the back row
+    /// adds no opacity.
+    #[test]
+    fn centroid_weight_is_the_floor_of_the_share_for_every_pair() {
+        for tf in 0..=255u32 {
+            for tb in 0..=255u32 {
+                let cb = u64::from((255 - tb) * tf);
+                let af = u64::from(255 * (255 - tf));
+                let want = if tf < CENTROID_MIN_T || cb == 0 {
+                    0
+                } else {
+                    65535 * cb / (af + cb)
+                };
+                let w = centroid_weight(tf, tb);
+                assert_eq!(u64::from(w), want, "T_f {tf} T_b {tb}");
+                assert!(w <= 65535);
+            }
+        }
+    }
+
+    /// The depth key orders f32 as IEEE `<=` does and is its own inverse.
+    #[test]
+    #[expect(clippy::cast_sign_loss, reason = "bit reinterpretation")]
+    fn depth_key_orders_and_inverts() {
+        let values = [
+            f32::NEG_INFINITY,
+            -3.0e38,
+            -2.5,
+            -1.0,
+            -1.0e-40,
+            -0.0,
+            0.0,
+            1.0e-40,
+            1.0,
+            1.5,
+            2.5,
+            3.0e38,
+            f32::INFINITY,
+        ];
+        for a in values {
+            assert_eq!(depth_key(depth_key(a.to_bits()) as u32) as u32, a.to_bits());
+            for b in values {
+                if a < b {
+                    assert!(depth_key(a.to_bits()) < depth_key(b.to_bits()), "{a} {b}");
+                }
+            }
+        }
+    }
+
+    /// The merged depth for every pair of transmittance bytes and depth orders: within
+    /// `[z_front, z_back]` (rows stay sorted), `z_front` bit for bit for an opaque front, an
+    /// empty back, a back row that is not behind, and a front below the threshold; `z_back`
+    /// approached as the front turns transparent.
+    #[test]
+    #[expect(clippy::cast_possible_truncation, reason = "bytes by construction")]
+    fn centroid_depth_stays_between_the_rows() {
+        let depths = [
+            (-5.0f32, -1.0f32),
+            (-1.0, 2.0),
+            (0.5, 0.5),
+            (1.0, 1.0e-7 + 1.0),
+            (1.0, 100.0),
+            (-0.0, 0.0),
+            (2.0, 1.0),
+        ];
+        for tf in 0..=255u32 {
+            for tb in 0..=255u32 {
+                for (zf, zb) in depths {
+                    let front = Row::new([1, 2, 3], tf as u8, zf);
+                    let back = Row::new([4, 5, 6], tb as u8, zb);
+                    let z = f32::from_bits(centroid_depth(front, back));
+                    if zb > zf {
+                        assert!(zf <= z && z <= zb, "T {tf} {tb}: {zf} {zb} -> {z}");
+                    }
+                    if zb <= zf || tf == 0 || tb == 255 || tf < CENTROID_MIN_T {
+                        assert_eq!(z.to_bits(), zf.to_bits(), "T {tf} {tb}: {zf} {zb} -> {z}");
+                    }
+                }
+                // An empty back row (+infinity) never moves the depth.
+                assert_eq!(
+                    centroid_depth(Row::new([0; 3], tf as u8, 3.0), Row::EMPTY),
+                    3.0f32.to_bits()
+                );
+            }
+        }
+        // The weight is the share of opacity: a front of T 255 (no opacity) gives all but
+        // 1/65536 of the way to the back row.
+        let z = f32::from_bits(centroid_depth(Row::new([0; 3], 255, 0.0), Row::new([9; 3], 0, 1.0)));
+        assert!(z > 0.999 && z <= 1.0, "{z}");
+        // Half the opacity each: half way in key space (the keys of 1.0 and 3.0 differ by 2^23).
+        let half = centroid_weight(170, 0); // af = 255 * 85, cb = 255 * 170: 2/3 behind
+        assert_eq!(half, 65535 * 2 / 3);
     }
 }

@@ -76,13 +76,15 @@ const BATCH_SLOTS: usize = 1 << (COL_BITS + LINE_BITS);
 /// already quantized row (its two words in the bits of `color[0]` and `color[1]`).
 #[derive(Clone, Copy, Debug)]
 struct Slot {
+    /// The pending fragments, `key` always `Some`: each lane's stable or content key
+    /// (`Fragment::hash`).
     fragments: FragmentLanes,
     mask: u8,
     rows: u8,
 }
 
 /// Gathers fragments pushed one pixel at a time into 8-pixel span inserts on a
-/// [`Framebuffer`] (see the [module docs](self)). A fixed-size value (about 43 KiB: build
+/// [`Framebuffer`] (see the [module docs](self)). A fixed-size value (about 52 KiB: build
 /// it once per frame and band, not per primitive), no allocation. Fragments are kept as
 /// f32 until their span is flushed, then validated and quantized 8 at a time
 /// ([`FragmentLanes::quantize_with`], byte-identical to
@@ -109,7 +111,10 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
             keys: [0; BATCH_SLOTS],
             span_inserts: 0,
             slots: [Slot {
-                fragments: FragmentLanes::TRANSPARENT,
+                fragments: FragmentLanes {
+                    key: Some([0; LANES]),
+                    ..FragmentLanes::TRANSPARENT
+                },
                 mask: 0,
                 rows: 0,
             }; BATCH_SLOTS],
@@ -125,7 +130,14 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
             return self.fb.insert(x, y, fragment);
         }
         let c = fragment.color();
-        self.push(x, y, [c.x, c.y, c.z, fragment.alpha()], fragment.depth(), false)
+        self.push(
+            x,
+            y,
+            [c.x, c.y, c.z, fragment.alpha()],
+            fragment.depth(),
+            fragment.seed_key(),
+            false,
+        )
     }
 
     /// Push a quantized row for pixel `(x, y)`.
@@ -138,11 +150,19 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         // bit-exact on every target the lanes support, which `tests/batch.rs` checks with
         // arbitrary bytes, NaN patterns included).
         let [w0, w1] = row.words();
-        self.push(x, y, [f32::from_bits(w0), f32::from_bits(w1), 0.0, 0.0], 0.0, true)
+        self.push(x, y, [f32::from_bits(w0), f32::from_bits(w1), 0.0, 0.0], 0.0, 0, true)
     }
 
     #[inline(always)]
-    fn push(&mut self, x: u32, y: u32, rgba: [f32; 4], depth: f32, is_row: bool) -> Result<(), FramebufferError> {
+    fn push(
+        &mut self,
+        x: u32,
+        y: u32,
+        rgba: [f32; 4],
+        depth: f32,
+        seed: u32,
+        is_row: bool,
+    ) -> Result<(), FramebufferError> {
         if x >= self.width || y >= self.height {
             return Err(FramebufferError::OutOfBounds {
                 x,
@@ -171,6 +191,9 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         f.color[2][lane] = rgba[2];
         f.alpha[lane] = rgba[3];
         f.depth[lane] = depth;
+        if let Some(keys) = &mut f.key {
+            keys[lane] = seed;
+        }
         slot.mask |= bit;
         if is_row {
             slot.rows |= bit;
@@ -184,20 +207,25 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     fn flush_slot(fb: &mut F, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
         let (x, y) = ((key as u32) * LANES_U32, (key >> 32) as u32);
         let fragments = slot.mask & !slot.rows;
+        let first = fb.pixel_id(x, y);
         // Every lane pushed as a fragment holds a validated `Fragment`: no lane is invalid.
-        let mut q = slot.fragments.quantize_validated_with::<F::Arith>(fragments);
+        let mut q = slot.fragments.quantize_validated_at::<F::Arith>(fragments, first);
         if slot.rows != 0 {
             for lane in 0..LANES {
                 if slot.rows & (1 << lane) != 0 {
                     let bits = |c: usize| slot.fragments.color[c][lane].to_bits();
-                    q.rows[lane] = Row::from_words([bits(0), bits(1)]);
+                    let row = Row::from_words([bits(0), bits(1)]);
+                    q.rows[lane] = row;
+                    #[expect(clippy::cast_possible_truncation, reason = "lane < 8")]
+                    let pixel = first.wrapping_add(lane as u32);
+                    q.hashes[lane] = crate::mlab::row_hash(row, pixel);
                 }
             }
         }
         let mask = q.valid | slot.rows;
         slot.mask = 0;
         slot.rows = 0;
-        fb.insert_span(x, y, &q.rows, mask)
+        fb.insert_span_hashed(x, y, &q.rows, &q.hashes, mask)
     }
 
     /// Insert every pending span into the framebuffer.

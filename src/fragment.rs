@@ -74,8 +74,8 @@ impl core::error::Error for FragmentError {}
 /// use mlab::glam::Vec3;
 /// use mlab::{Arithmetic, Fragment, FragmentError, Paper, Row, Unbiased};
 /// let f = Fragment::straight(Vec3::new(1.0, 0.5, 0.0), 0.5, 2.0)?;
-/// assert_eq!(Paper::quantize(&f), Row::new([128, 64, 0], 127, 2.0));
-/// assert_eq!(Unbiased::quantize(&f), Paper::quantize(&f)); // not faint: the same bytes
+/// assert_eq!(Paper::quantize(&f, f.hash(0)), Row::new([128, 64, 0], 127, 2.0));
+/// assert_eq!(Unbiased::quantize(&f, f.hash(0)), Paper::quantize(&f, 0)); // not faint: the same bytes
 /// assert_eq!(Fragment::premultiplied(Vec3::ONE, 1.5, 2.0), Err(FragmentError::AlphaOutOfRange));
 /// assert_eq!(Fragment::straight_rgba([1.0, 0.5, 0.0, 0.5], 2.0)?, f);
 /// # Ok::<(), FragmentError>(())
@@ -85,6 +85,7 @@ pub struct Fragment {
     color: Vec3,
     alpha: f32,
     depth: f32,
+    key: Option<u32>,
 }
 
 impl Fragment {
@@ -120,6 +121,7 @@ impl Fragment {
                 color: pre,
                 alpha,
                 depth,
+                key: None,
             });
         }
         Self::error(color.x, color.y, color.z, alpha, depth, straight)
@@ -151,6 +153,7 @@ impl Fragment {
                 color: pre,
                 alpha,
                 depth,
+                key: None,
             }),
         }
     }
@@ -185,6 +188,58 @@ impl Fragment {
     /// Pure additive light (alpha 0): adds `light` to whatever lies behind it, occludes nothing.
     pub fn additive(light: Vec3, depth: f32) -> Result<Fragment, FragmentError> {
         Fragment::premultiplied(light, 0.0, depth)
+    }
+
+    /// This fragment with a stable key: a 32-bit id of what emitted it, unique in the frame
+    /// and the same in every frame (the primitive's id: `SV_PrimitiveID` or
+    /// `gl_PrimitiveID` mixed with a draw or instance id in a shader, the triangle's index in
+    /// a software rasterizer). The default arithmetic ([`Unbiased`](crate::Unbiased)) seeds
+    /// its dithers with it ([`Fragment::hash`]), so a fragment is rounded the same way in
+    /// every frame while the camera moves. Without a key the seed is the fragment's content,
+    /// which changes with its depth: the dithers re-roll every frame, and a dense faint
+    /// layer (fog) shimmers under camera motion (`docs/quality.md`). [`Paper`](crate::Paper)
+    /// has no dither and ignores the key.
+    ///
+    /// ```
+    /// use mlab::glam::Vec3;
+    /// use mlab::{Fragment, fragment_hash};
+    /// let f = Fragment::straight(Vec3::ONE, 0.02, 5.0)?.with_key(42);
+    /// assert_eq!(f.key(), Some(42));
+    /// // The seed of pixel 7: the same whatever the depth.
+    /// let g = Fragment::straight(Vec3::ONE, 0.02, 6.0)?.with_key(42);
+    /// assert_eq!(f.hash(7), g.hash(7));
+    /// assert_eq!(f.hash(7), fragment_hash(42, 7));
+    /// # Ok::<(), mlab::FragmentError>(())
+    /// ```
+    #[inline]
+    #[must_use]
+    pub const fn with_key(self, key: u32) -> Fragment {
+        Fragment { key: Some(key), ..self }
+    }
+
+    /// The stable key, if one was given ([`with_key`](Self::with_key)).
+    #[inline]
+    pub const fn key(&self) -> Option<u32> {
+        self.key
+    }
+
+    /// The hash of this fragment in pixel `pixel`, which seeds the dithers of
+    /// [`Unbiased`](crate::Unbiased): [`fragment_hash`](crate::fragment_hash)`(key, pixel)`,
+    /// with the stable key, or without one the content key: the XOR of the f32 bits of the
+    /// premultiplied color channels, alpha and depth (`docs/layout.md`).
+    #[inline]
+    pub fn hash(&self, pixel: u32) -> u32 {
+        crate::arith::fragment_hash(self.seed_key(), pixel)
+    }
+
+    /// The stable key, or the content key ([`hash`](Self::hash)).
+    #[inline(always)]
+    pub(crate) fn seed_key(&self) -> u32 {
+        let content = || {
+            let c = self.color;
+            c.x.to_bits() ^ c.y.to_bits() ^ c.z.to_bits() ^ self.alpha.to_bits() ^ self.depth.to_bits()
+        };
+        self.key.unwrap_or_else(content)
     }
 
     /// Premultiplied color.

@@ -134,10 +134,24 @@ impl<const K: usize, A: Arithmetic> Hybrid<K, A> {
         self.tail
     }
 
-    /// Insert a validated fragment with Listing 2 (quantized once, by `A`).
+    /// Insert a validated fragment with Listing 2 (quantized once, by `A`), as the fragment
+    /// of pixel 0 ([`insert_at`](Self::insert_at)).
     #[inline]
     pub fn insert(&mut self, fragment: &Fragment) {
-        insert(&mut self.head, &mut self.tail, A::quantize(fragment));
+        self.insert_at(fragment, 0);
+    }
+
+    /// Insert a validated fragment into the pixel of id `pixel` (any id the caller picks:
+    /// a pixel or ray index), quantized with the hash [`Fragment::hash`]`(pixel)`: with a
+    /// keyed fragment ([`Fragment::with_key`]) the dither of a faint fragment stays the same
+    /// from one frame to the next.
+    #[inline]
+    pub fn insert_at(&mut self, fragment: &Fragment, pixel: u32) {
+        insert(
+            &mut self.head,
+            &mut self.tail,
+            A::quantize(fragment, fragment.hash(pixel)),
+        );
     }
 
     /// Insert an already quantized row with Listing 2.

@@ -142,7 +142,7 @@
 //! | [`hybrid::PaperTail`] | the paper's HT tail: 3 x 10, 16, 16 bit | 8 bytes, align 8 |
 //! | [`BlendingArray<M>`] | MLAB blending array, `M >= 1` rows | `8 * M` bytes |
 //! | [`Hybrid<K>`] | HT: `K` head rows + tail | `8 * (K + 1)` bytes |
-//! | framebuffers ([`Grid`]), [`SpanBatcher`] | views over caller-owned `&mut [Row]`; a fixed-size batcher | none; about 43 KiB |
+//! | framebuffers ([`Grid`]), [`SpanBatcher`] | views over caller-owned `&mut [Row]`; a fixed-size batcher | none; about 52 KiB |
 //!
 //! - [`mlab::insert_with`] is Listing 1 (insert-and-merge), [`hybrid::insert`] is Listing 2,
 //!   [`resolve_rows`] is Eq. 5 and [`Resolved::over`] Eq. 6. The module `mlab::mlab` is
@@ -185,7 +185,7 @@ mod sealed {
     pub trait Sealed {}
 }
 
-pub use arith::{Arithmetic, Paper, Unbiased};
+pub use arith::{Arithmetic, Paper, Unbiased, fragment_hash, lowbias32};
 pub use batch::SpanBatcher;
 pub use error::Error;
 pub use fragment::{Fragment, FragmentError};

@@ -9,7 +9,8 @@
 //! merge(front, back):                                 // Eq. 7 and 8, section 3.2
 //!   A = A_front + A_back * T_front
 //!   T = T_front * T_back
-//!   z = z_front
+//!   z = z_front                                       // Paper; Unbiased: the opacity-weighted
+//!                                                     // depth of the two (crate::arith)
 //! ```
 //!
 //! Arithmetic: the merge runs in exact unorm8 integers, in one of two arithmetics
@@ -47,9 +48,31 @@ impl<const M: usize> AtLeastOne<M> {
 /// Rows read from arbitrary bytes (unsorted, NaN depth) are processed by the same steps;
 /// the result is deterministic and never panics, but the invariants only hold if they held
 /// before.
+///
+/// The merge of [`Unbiased`] is seeded by the row's content key ([`row_hash`] of pixel 0),
+/// which changes with the row's depth: [`insert_hashed`] takes the hash of a keyed fragment
+/// instead ([`Fragment::hash`]).
 #[inline]
 pub fn insert_with<A: Arithmetic, const M: usize>(rows: &mut [Row; M], row: Row) {
-    insert_lanes::<A, _, _, M>(rows, row, true);
+    insert_lanes::<A, _, _, M>(rows, row, true, row_hash(row, 0));
+}
+
+/// Listing 1 as [`insert_with`], the merge seeded by `h`, the inserted fragment's hash
+/// ([`Fragment::hash`], [`crate::fragment_hash`]).
+#[inline]
+pub fn insert_hashed<A: Arithmetic, const M: usize>(rows: &mut [Row; M], row: Row, h: u32) {
+    insert_lanes::<A, _, _, M>(rows, row, true, h);
+}
+
+/// The hash of an already quantized row in pixel `pixel`, with its content key (the XOR of
+/// its two words, [`Row::words`]): `fragment_hash(word0 ^ word1, pixel)`. What inserts of
+/// rows ([`insert_with`], [`Framebuffer::insert_row`](crate::Framebuffer::insert_row)) seed
+/// the merge with.
+#[inline(always)]
+#[must_use]
+pub const fn row_hash(row: Row, pixel: u32) -> u32 {
+    let [w0, w1] = row.words();
+    crate::arith::fragment_hash(w0 ^ w1, pixel)
 }
 
 /// Listing 1, written once for every lane width (a [`Row`] is one lane; see
@@ -60,6 +83,7 @@ pub(crate) fn insert_lanes<A: Arithmetic, L: RowLanes, S: Slot<L>, const M: usiz
     b: &mut [S; M],
     fragment: L,
     on: L::Mask,
+    h: L::Hash,
 ) {
     let () = AtLeastOne::<M>::OK;
     let mut f = fragment;
@@ -76,7 +100,7 @@ pub(crate) fn insert_lanes<A: Arithmetic, L: RowLanes, S: Slot<L>, const M: usiz
             // Compression (merge last two rows): the row pushed out (`f` after the swap, B[m]
             // in the listing) merged behind `front`.
             let front = L::select(swap, f, row);
-            slot.store(L::select(on, L::merge_pair::<A>(swap, f, row), front));
+            slot.store(L::select(on, L::merge_pair::<A>(swap, f, row, h), front));
         }
     }
 }
@@ -130,13 +154,38 @@ impl<const M: usize, A: Arithmetic> BlendingArray<M, A> {
         &self.rows
     }
 
-    /// Insert a validated fragment (quantized here, once, by `A`) with Listing 1.
+    /// Insert a validated fragment (quantized here, once, by `A`) with Listing 1, as the
+    /// fragment of pixel 0 ([`insert_at`](Self::insert_at)).
     #[inline]
     pub fn insert(&mut self, fragment: &Fragment) {
-        insert_with::<A, M>(&mut self.rows, A::quantize(fragment));
+        self.insert_at(fragment, 0);
     }
 
-    /// Insert an already quantized row with Listing 1.
+    /// Insert a validated fragment into the array of pixel `pixel` (any id the caller picks
+    /// for this array: a pixel index, a ray index), quantized and merged with the hash
+    /// [`Fragment::hash`]`(pixel)`: with a keyed fragment ([`Fragment::with_key`]) and a
+    /// stable `pixel`, [`Unbiased`]'s dithers do not change from one frame to the next.
+    ///
+    /// ```
+    /// use mlab::glam::Vec3;
+    /// use mlab::{BlendingArray, Fragment};
+    /// let mut a = BlendingArray::<2>::new();
+    /// let (x, y, width) = (3, 5, 640);
+    /// for (prim, z) in [(11u32, 1.0), (12, 2.0), (13, 3.0)] {
+    ///     let f = Fragment::straight(Vec3::splat(0.5), 0.04, z)?.with_key(prim);
+    ///     a.insert_at(&f, y * width + x);
+    /// }
+    /// assert!(a.resolve().transmittance < 1.0);
+    /// # Ok::<(), mlab::FragmentError>(())
+    /// ```
+    #[inline]
+    pub fn insert_at(&mut self, fragment: &Fragment, pixel: u32) {
+        let h = fragment.hash(pixel);
+        insert_hashed::<A, M>(&mut self.rows, A::quantize(fragment, h), h);
+    }
+
+    /// Insert an already quantized row with Listing 1 ([`insert_with`]: seeded by the row's
+    /// content, [`row_hash`] of pixel 0).
     #[inline]
     pub fn insert_row(&mut self, row: Row) {
         insert_with::<A, M>(&mut self.rows, row);

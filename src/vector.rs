@@ -13,6 +13,9 @@ pub(crate) trait RowLanes: Copy {
     type Mask: Copy + core::ops::BitAnd<Output = Self::Mask>;
     /// Per-lane HT tail of layout `T`.
     type Tail<T: TailFormat>: Copy;
+    /// Per-lane hash of the inserted fragment ([`crate::arith::fragment_hash`]), in the form
+    /// the merge reads it.
+    type Hash: Copy;
     /// `self.z <= other.z` in IEEE f32 (false when either is NaN).
     fn depth_le(self, other: Self) -> Self::Mask;
     /// `if mask { a } else { b }` per lane.
@@ -27,12 +30,12 @@ pub(crate) trait RowLanes: Copy {
         (Self::select(mask, a, b), Self::select(mask, b, a))
     }
     /// Eq. 7-8 per lane in the arithmetic `A` ([`Arithmetic::merge`]).
-    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self;
+    fn merge<A: Arithmetic>(front: Self, back: Self, h: Self::Hash) -> Self;
     /// Per lane, `merge(a, b)` where `a_first`, else `merge(b, a)`: the last step of
-    /// Listing 1 ([`Arithmetic::merge_pair`]).
+    /// Listing 1.
     #[inline(always)]
-    fn merge_pair<A: Arithmetic>(a_first: Self::Mask, a: Self, b: Self) -> Self {
-        Self::merge::<A>(Self::select(a_first, a, b), Self::select(a_first, b, a))
+    fn merge_pair<A: Arithmetic>(a_first: Self::Mask, a: Self, b: Self, h: Self::Hash) -> Self {
+        Self::merge::<A>(Self::select(a_first, a, b), Self::select(a_first, b, a), h)
     }
     /// [`TailFormat::add`] per lane.
     fn tail_add<T: TailFormat>(tail: Self::Tail<T>, row: Self) -> Self::Tail<T>;
@@ -43,6 +46,7 @@ pub(crate) trait RowLanes: Copy {
 impl RowLanes for Row {
     type Mask = bool;
     type Tail<T: TailFormat> = T;
+    type Hash = u32;
     #[inline(always)]
     fn depth_le(self, other: Self) -> bool {
         self.depth() <= other.depth()
@@ -53,12 +57,8 @@ impl RowLanes for Row {
         Row::from_le_u64(core::hint::select_unpredictable(mask, a.to_le_u64(), b.to_le_u64()))
     }
     #[inline(always)]
-    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
-        A::merge(front, back)
-    }
-    #[inline(always)]
-    fn merge_pair<A: Arithmetic>(a_first: bool, a: Self, b: Self) -> Self {
-        A::merge_pair(a_first, a, b)
+    fn merge<A: Arithmetic>(front: Self, back: Self, h: u32) -> Self {
+        A::merge(front, back, h)
     }
     #[inline(always)]
     fn tail_add<T: TailFormat>(tail: T, row: Self) -> T {

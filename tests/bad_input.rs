@@ -67,7 +67,7 @@ fn valid_edge_fragments_are_accepted() {
     assert!(Fragment::straight(Vec3::splat(4.0), 0.25, -5.0).is_ok()); // HDR straight, premul = 1
     let f = Fragment::premultiplied(Vec3::splat(0.9), 0.1, -0.0).unwrap();
     assert_eq!(
-        <mlab::Paper as mlab::Arithmetic>::quantize(&f).depth().to_bits(),
+        <mlab::Paper as mlab::Arithmetic>::quantize(&f, 0).depth().to_bits(),
         (-0.0f32).to_bits(),
         "depth stored bit for bit"
     );
@@ -131,7 +131,7 @@ fn framebuffers_insert_resolve_and_expose_bytes() {
     let f = Fragment::straight(Vec3::new(0.0, 1.0, 0.0), 0.5, 2.0).unwrap();
     fb.insert(1, 0, &f).unwrap();
     // The default arithmetic quantizes with its dither: 127.5 becomes 127 or 128.
-    let row = mlab::Unbiased::quantize(&f);
+    let row = mlab::Unbiased::quantize(&f, f.hash(1));
     let ([_, g, _], t) = (row.color(), row.transmittance());
     assert!(g == 127 || g == 128);
     assert_eq!(g, 255 - t, "color and alpha share the dither");

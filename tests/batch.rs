@@ -410,10 +410,10 @@ fn pixel_major_bands_split_the_storage() {
     }
 }
 
-/// The batcher's size as the docs state it (src/lib.rs, src/batch.rs: "about 43 KiB"): 256
-/// pending spans of five f32 lanes, their masks and keys.
+/// The batcher's size as the docs state it (src/lib.rs, src/batch.rs: "about 52 KiB"): 256
+/// pending spans of five f32 lanes and their fragment keys, their masks and span keys.
 #[test]
 fn batcher_size_is_as_documented() {
     let size = std::mem::size_of::<SpanBatcher<'static, SpanFramebuffer<'static, 4>>>();
-    assert!((42 * 1024..=44 * 1024).contains(&size), "{size} bytes");
+    assert!((51 * 1024..=53 * 1024).contains(&size), "{size} bytes");
 }

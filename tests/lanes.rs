@@ -110,8 +110,8 @@ fn check_arithmetic<A: Model>(stream: &[Step], garbage: &[u64]) -> Result<(), Te
 /// A row from a valid fragment, or (one in five) arbitrary bits: NaN depths, any T.
 fn any_row() -> impl Strategy<Value = Row> {
     prop_oneof![
-        4 => common::normal_fragment().prop_map(|f| <mlab::Paper as mlab::Arithmetic>::quantize(&f)),
-        1 => common::additive_fragment().prop_map(|f| <mlab::Paper as mlab::Arithmetic>::quantize(&f)),
+        4 => common::normal_fragment().prop_map(|f| <mlab::Paper as mlab::Arithmetic>::quantize(&f, 0)),
+        1 => common::additive_fragment().prop_map(|f| <mlab::Paper as mlab::Arithmetic>::quantize(&f, 0)),
         1 => any::<u64>().prop_map(|b| Row::from_bytes(b.to_le_bytes())),
     ]
 }
@@ -163,7 +163,7 @@ fn edge_f32() -> impl Strategy<Value = f32> {
 #[test]
 fn edge_case_table() {
     let f = |c: f32, a: f32, z: f32| {
-        <mlab::Paper as mlab::Arithmetic>::quantize(&Fragment::premultiplied(Vec3::splat(c), a, z).expect("valid"))
+        <mlab::Paper as mlab::Arithmetic>::quantize(&Fragment::premultiplied(Vec3::splat(c), a, z).expect("valid"), 0)
     };
     let sub = f32::from_bits(1);
     let cases: Vec<(&str, Vec<Step>)> = vec![

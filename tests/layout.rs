@@ -91,7 +91,7 @@ fn unorm_reads_every_byte_as_the_resolve_does() {
     let unorm = |b: u8| f32::from(b) * INV255;
     let quantize = |v: f32| {
         let f = mlab::Fragment::premultiplied(mlab::glam::Vec3::splat(v), 1.0, 1.0).expect("valid");
-        <Paper as mlab::Arithmetic>::quantize(&f).color()[0]
+        <Paper as mlab::Arithmetic>::quantize(&f, 0).color()[0]
     };
     assert_eq!(unorm(0), 0.0);
     assert_eq!(unorm(255), 1.0);

@@ -64,7 +64,7 @@ fn infinite_depth() {
     for z in [f32::MAX, -f32::MAX, f32::from_bits(1), -0.0] {
         let f = Fragment::premultiplied(OK, 0.5, z).unwrap();
         assert_eq!(
-            <mlab::Paper as mlab::Arithmetic>::quantize(&f).depth().to_bits(),
+            <mlab::Paper as mlab::Arithmetic>::quantize(&f, 0).depth().to_bits(),
             z.to_bits()
         );
     }
@@ -114,7 +114,7 @@ fn alpha_out_of_range() {
     for a in [0.0, -0.0, 1.0, f32::from_bits(1)] {
         let f = Fragment::premultiplied(Vec3::ZERO, a, 1.0).unwrap();
         assert_eq!(
-            <mlab::Paper as mlab::Arithmetic>::quantize(&f).transmittance(),
+            <mlab::Paper as mlab::Arithmetic>::quantize(&f, 0).transmittance(),
             255 - (a * 255.0 + 0.5) as u8
         );
     }
@@ -157,7 +157,7 @@ fn negative_color() {
     }
     // -0.0 is zero: accepted, quantized to byte 0.
     let f = Fragment::premultiplied(Vec3::new(-0.0, 0.0, -0.0), 0.5, 1.0).unwrap();
-    assert_eq!(<mlab::Paper as mlab::Arithmetic>::quantize(&f).color(), [0, 0, 0]);
+    assert_eq!(<mlab::Paper as mlab::Arithmetic>::quantize(&f, 0).color(), [0, 0, 0]);
 }
 
 #[test]
@@ -184,7 +184,7 @@ fn premultiplied_color_above_one() {
     assert_eq!(f.color(), Vec3::new(0.75, 0.0, 0.0));
     // Huge finite straight color with alpha 0 is zero light, accepted.
     assert_eq!(
-        <mlab::Paper as mlab::Arithmetic>::quantize(&Fragment::straight(Vec3::splat(f32::MAX), 0.0, 1.0).unwrap()),
+        <mlab::Paper as mlab::Arithmetic>::quantize(&Fragment::straight(Vec3::splat(f32::MAX), 0.0, 1.0).unwrap(), 0),
         Row::new([0; 3], 255, 1.0)
     );
 }
@@ -195,7 +195,7 @@ fn premultiplied_color_above_alpha_is_additive_light() {
     let part = Fragment::premultiplied(Vec3::new(0.5, 0.0, 0.0), 0.1, 2.0).unwrap();
     let light = Fragment::additive(Vec3::new(0.0, 0.4, 0.0), 1.0).unwrap();
     assert_eq!(
-        <mlab::Paper as mlab::Arithmetic>::quantize(&light),
+        <mlab::Paper as mlab::Arithmetic>::quantize(&light, 0),
         Row::new([0, 102, 0], 255, 1.0)
     );
     let mut b = BlendingArray::<4, Paper>::new();
@@ -273,7 +273,7 @@ fn coordinates_outside_the_buffer() {
         };
         assert_eq!(fb.insert(x, y, &f), Err(e));
         assert_eq!(
-            fb.insert_row(x, y, <mlab::Paper as mlab::Arithmetic>::quantize(&f)),
+            fb.insert_row(x, y, <mlab::Paper as mlab::Arithmetic>::quantize(&f, 0)),
             Err(e)
         );
         assert_eq!(fb.pixel(x, y), Err(e));
@@ -394,13 +394,27 @@ fn garbage_rows_read_back_from_bytes() {
         full,
         [
             front,
-            <mlab::Unbiased as mlab::Arithmetic>::merge(Row::new([0, 30, 0], 128, 2.0), nan_row)
+            <mlab::Unbiased as mlab::Arithmetic>::merge(
+                Row::new([0, 30, 0], 128, 2.0),
+                nan_row,
+                mlab::mlab::row_hash(nan_row, 0)
+            )
         ]
     );
-    // ... and when the array is not full, it becomes a non-empty row at +infinity.
+    // ... and when the array is not full, it is merged behind the empty row: its colors and
+    // T as they were; the depth is the empty row's (+infinity) in the paper's arithmetic,
+    // and in the unbiased one the opacity-weighted key between +infinity's and the NaN's,
+    // which is a NaN pattern (garbage stays garbage; deterministic, no panic).
+    let mut open = [front, Row::EMPTY];
+    mlab_kernel::insert_with::<mlab::Paper, _>(&mut open, nan_row);
+    assert_eq!(open, [front, Row::new([20, 0, 0], 100, f32::INFINITY)]);
     let mut open = [front, Row::EMPTY];
     mlab_kernel::insert_with::<mlab::Unbiased, _>(&mut open, nan_row);
-    assert_eq!(open, [front, Row::new([20, 0, 0], 100, f32::INFINITY)]);
+    assert_eq!(
+        (open[0], open[1].color(), open[1].transmittance()),
+        (front, [20, 0, 0], 100)
+    );
+    assert!(open[1].depth().is_nan());
     // Rows already holding a NaN depth are passed over by new rows (never swapped).
     let mut with_nan = [nan_row, Row::EMPTY];
     mlab_kernel::insert_with::<mlab::Unbiased, _>(&mut with_nan, front);
@@ -524,6 +538,7 @@ fn lanes_invalid_fragments_and_off_lanes() {
         ],
         alpha: [0.5, 0.5, 0.5, 0.5, 1.0, 2.0, 0.5, 0.5],
         depth: [1.0, 1.0, 1.0, 1.0, 1.0, 1.0, f32::INFINITY, 3.0],
+        key: None,
     };
     let mask = 0b0111_1111;
     let q = frags.quantize_with::<Paper>(mask);

@@ -22,7 +22,7 @@ type Op = (u32, u32, [Row; LANES], u8);
 
 fn ops(width: u32, height: u32) -> impl Strategy<Value = Vec<Op>> {
     let row = prop_oneof![
-        4 => common::normal_fragment().prop_map(|f| <mlab::Paper as mlab::Arithmetic>::quantize(&f)),
+        4 => common::normal_fragment().prop_map(|f| <mlab::Paper as mlab::Arithmetic>::quantize(&f, 0)),
         1 => any::<u64>().prop_map(|b| Row::from_bytes(b.to_le_bytes())),
     ];
     prop::collection::vec((0..width, 0..height, prop::array::uniform8(row), any::<u8>()), 0..60).prop_map(move |v| {
@@ -206,6 +206,7 @@ fn out_of_bounds_lanes_are_refused_and_change_nothing() {
         color: [[0.5; 8]; 3],
         alpha: [0.5; 8],
         depth: [2.0; 8],
+        key: None,
     };
     frags.depth[1] = f32::INFINITY;
     frags.alpha[2] = 2.0;

@@ -771,6 +771,7 @@ unsafe fn insert_span(
             color: [span.r, span.g, span.b],
             alpha: span.a,
             depth: span.depth,
+            key: None,
         };
         let invalid = with_grid!(s, f => {
             let r = if straight {

@@ -241,6 +241,7 @@ fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArith
             color: [span.r, span.g, span.b],
             alpha: span.a,
             depth: span.depth,
+            key: None,
         };
         let straight = i % 2 == 0;
         let mut refused = 0xeeu8;

@@ -5,7 +5,7 @@ use mlab::{Arithmetic, Fragment, FragmentError, Paper, Resolved, Row, Unbiased};
 
 use crate::defects::defects;
 use crate::input::{Ctor, RawFragment};
-use mlab_reference::model::{DITHERED_QUANT_ERROR, Model, is_faint, ref_quantize_dithered};
+use mlab_reference::model::{DITHERED_QUANT_ERROR, Model, is_faint, ref_fragment_hash, ref_key, ref_quantize_dithered};
 
 /// Build the fragment with the kernel and check it against the defect model:
 /// `Ok` exactly when the arguments have no defect, otherwise one of their defects, with
@@ -92,15 +92,17 @@ fn check_nan_first(raw: &RawFragment, e: FragmentError) {
 /// (to nearest, dithered for faint fragments), each byte-equal to the reference quantization
 /// of its arithmetic ([`Model::ref_quantize`]), the faint ones byte-equal to the reference
 /// dithered quantization ([`ref_quantize_dithered`]); each checked with [`check_row`].
-pub fn check_quantization(f: &Fragment) {
+pub fn check_quantization(f: &Fragment, pixel: u32) {
     let (c, a, z) = (f.color().to_array(), f.alpha(), f.depth());
-    let paper = Paper::quantize(f);
-    check_row(f, paper, Paper::ref_row(f), Paper::quant_error(a), Paper::NAME);
-    let unbiased = Unbiased::quantize(f);
+    let h = f.hash(pixel);
+    assert_eq!(h, ref_fragment_hash(ref_key(f), pixel), "{f:?}: hash in pixel {pixel}");
+    let paper = Paper::quantize(f, h);
+    check_row(f, paper, Paper::ref_row(f, pixel), Paper::quant_error(a), Paper::NAME);
+    let unbiased = Unbiased::quantize(f, h);
     check_row(
         f,
         unbiased,
-        Unbiased::ref_row(f),
+        Unbiased::ref_row(f, pixel),
         Unbiased::quant_error(a),
         Unbiased::NAME,
     );
@@ -110,7 +112,7 @@ pub fn check_quantization(f: &Fragment) {
         check_row(
             f,
             unbiased,
-            ref_quantize_dithered(c, a, z),
+            ref_quantize_dithered(c, a, z, h),
             DITHERED_QUANT_ERROR,
             "dithered",
         );

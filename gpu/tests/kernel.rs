@@ -79,8 +79,8 @@ fn expected(which: u32, i: u32) -> u32 {
     let bytes = |w: [u32; 2]| Row::from_words(w).to_bytes();
     let words = |b: [u8; 8]| Row::from_bytes(b).words();
     match which {
-        0 => Paper::merge(front, back).words()[0],
-        1 => Unbiased::merge(front, back).words()[0],
+        0 => Paper::merge(front, back, i).words()[0],
+        1 => Unbiased::merge(front, back, i).words()[0],
         2 => {
             let mut t = PaperTail::from_bytes(bytes(tail));
             t.add(back);

@@ -66,7 +66,8 @@ pub fn tail_sums(binned: &BinnedStream, k: usize, arith: Arith) -> Result<Vec<Ta
             let fragment = frags[i as usize]
                 .to_kernel()
                 .map_err(|e| format!("fragment {i}: {e}"))?;
-            let row = arith.quantize(&fragment);
+            #[expect(clippy::cast_possible_truncation, reason = "pixel indices of a lab frame fit in u32")]
+            let row = arith.quantize(&fragment, p as u32);
             if row.is_invisible() {
                 continue;
             }

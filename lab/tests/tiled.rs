@@ -47,7 +47,8 @@ fn mlab_sequential<A: Arithmetic>(s: &Stream) -> Vec<[u8; 4]> {
 fn abuffer_sequential(s: &Stream) -> Vec<[u8; 4]> {
     let mut lists: Vec<Vec<(usize, Row)>> = vec![Vec::new(); s.pixels()];
     for (i, f) in s.frags.iter().enumerate() {
-        lists[f.pixel as usize].push((i, Unbiased::quantize(&f.to_kernel().unwrap())));
+        let k = f.to_kernel().unwrap();
+        lists[f.pixel as usize].push((i, Unbiased::quantize(&k, k.hash(f.pixel))));
     }
     let bg = Vec3::from(s.background);
     lists

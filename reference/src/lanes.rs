@@ -166,18 +166,34 @@ pub fn check_hybrid_span<const K: usize, A: Arithmetic>(
 /// report the invalid lanes and equal the scalar inserts of the valid rows. For the
 /// default arithmetic, `quantize`, `quantize_straight` and `mlab_insert_fragments` give
 /// the same.
+///
+/// Once with content keys and once with stable keys (`FragmentLanes::key`, derived from the
+/// raw bits); the lanes' hashes equal `Fragment::hash` and the reference hash of their pixel.
 pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask: u8) -> Result<(), String> {
+    let stable = raws.map(|r| r.0[0].to_bits().rotate_left(7) ^ r.2.to_bits().wrapping_mul(0x9e37_79b9));
+    check_fragment_lanes_keyed::<A>(raws, None, mask)?;
+    check_fragment_lanes_keyed::<A>(raws, Some(stable), mask)
+}
+
+fn check_fragment_lanes_keyed<A: Model>(
+    raws: &[([f32; 3], f32, f32); LANES],
+    key: Option<[u32; LANES]>,
+    mask: u8,
+) -> Result<(), String> {
     let name = A::NAME;
     let fl = FragmentLanes {
         color: core::array::from_fn(|c| core::array::from_fn(|l| raws[l].0[c])),
         alpha: raws.map(|r| r.1),
         depth: raws.map(|r| r.2),
+        key,
     };
+    // Pixel ids of a span that does not start at 0, wrapping past u32::MAX.
+    let first = u32::MAX - 3;
     for straight in [false, true] {
         let q = if straight {
-            fl.quantize_straight_with::<A>(mask)
+            fl.quantize_straight_at::<A>(mask, first)
         } else {
-            fl.quantize_with::<A>(mask)
+            fl.quantize_at::<A>(mask, first)
         };
         ensure!(q.valid & q.invalid == 0, "lanes both valid and invalid: {q:?}");
         ensure!(
@@ -191,6 +207,8 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
             } else {
                 Fragment::premultiplied(Vec3::from_array(c), a, z)
             };
+            let scalar = scalar.map(|f| key.map_or(f, |k| f.with_key(k[lane])));
+            let pixel = first.wrapping_add(lane as u32);
             match (on, scalar) {
                 (true, Ok(f)) => {
                     ensure!(
@@ -198,7 +216,14 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
                         "lane {lane}: scalar accepts {:?}, lanes refuse (straight {straight})",
                         raws[lane]
                     );
-                    let (row, scalar_row, reference) = (q.rows[lane], A::quantize(&f), A::ref_row(&f));
+                    let h = f.hash(pixel);
+                    let want_h = crate::model::ref_fragment_hash(crate::model::ref_key(&f), pixel);
+                    ensure!(
+                        q.hashes[lane] == h && h == want_h,
+                        "lane {lane} hash: lanes {:#x}, scalar {h:#x}, reference {want_h:#x}",
+                        q.hashes[lane]
+                    );
+                    let (row, scalar_row, reference) = (q.rows[lane], A::quantize(&f, h), A::ref_row(&f, pixel));
                     ensure!(
                         row == scalar_row && row == reference,
                         "lane {lane} {name} straight {straight}: lanes {row:?}, scalar {scalar_row:?}, reference {reference:?}"
@@ -215,7 +240,7 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
     }
     // The span inserts of fragments (`Framebuffer::insert_span_fragments`, one span of 8 x 1
     // pixels): invalid lanes reported and left untouched.
-    let q = fl.quantize_with::<A>(mask);
+    let q = fl.quantize_at::<A>(mask, 0);
     let mut storage = vec![Row::EMPTY; 16];
     let mut fb = SpanFramebuffer::<2, A>::new_cleared(&mut storage, 8, 1).map_err(|e| format!("{e}"))?;
     let invalid = fb.insert_span_fragments(0, 0, &fl, mask).map_err(|e| format!("{e}"))?;
@@ -227,7 +252,7 @@ pub fn check_fragment_lanes<A: Model>(raws: &[([f32; 3], f32, f32); LANES], mask
     let mut expected = [[Row::EMPTY; 2]; LANES];
     for (lane, p) in expected.iter_mut().enumerate() {
         if q.valid >> lane & 1 == 1 {
-            listing1::insert_with::<A, 2>(p, q.rows[lane]);
+            listing1::insert_hashed::<A, 2>(p, q.rows[lane], q.hashes[lane]);
         }
     }
     check_mlab_rows(&span, &expected)?;

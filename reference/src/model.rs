@@ -30,13 +30,14 @@ pub trait Model: Arithmetic {
     /// The HT tail layout of this arithmetic.
     const TAIL: TailLayout;
 
-    /// Paper Eq. 7 and 8 on bytes, products rounded as this arithmetic documents.
-    fn ref_merge(front: Row, back: Row) -> Row;
+    /// Paper Eq. 7 and 8 on bytes, products rounded as this arithmetic documents, during
+    /// the insert of a fragment of hash `h` ([`ref_fragment_hash`]).
+    fn ref_merge(front: Row, back: Row, h: u32) -> Row;
 
-    /// Quantize a validated fragment's premultiplied color, alpha and depth into a row:
-    /// to nearest (`floor(v * 255 + 0.5)` per channel, `T = 255 - floor(alpha * 255 +
-    /// 0.5)`, in f32), unless the arithmetic says otherwise.
-    fn ref_quantize(color: [f32; 3], alpha: f32, depth: f32) -> Row {
+    /// Quantize a validated fragment's premultiplied color, alpha and depth, of hash `h`,
+    /// into a row: to nearest (`floor(v * 255 + 0.5)` per channel, `T = 255 - floor(alpha *
+    /// 255 + 0.5)`, in f32), unless the arithmetic says otherwise.
+    fn ref_quantize(color: [f32; 3], alpha: f32, depth: f32, _h: u32) -> Row {
         Row::new(color.map(|c| ref_byte(c, 0.5)), 255 - ref_byte(alpha, 0.5), depth)
     }
 
@@ -46,9 +47,11 @@ pub trait Model: Arithmetic {
         0.5
     }
 
-    /// [`Model::ref_quantize`] of a fragment.
-    fn ref_row(f: &Fragment) -> Row {
-        Self::ref_quantize(f.color().to_array(), f.alpha(), f.depth())
+    /// [`Model::ref_quantize`] of a fragment in the pixel of id `pixel`.
+    fn ref_row(f: &Fragment, pixel: u32) -> Row {
+        let c = f.color().to_array();
+        let h = ref_fragment_hash(ref_key(f), pixel);
+        Self::ref_quantize(c, f.alpha(), f.depth(), h)
     }
 }
 
@@ -68,9 +71,10 @@ pub const DITHERED_QUANT_ERROR: f64 = 511.0 / 512.0;
 
 /// The dithered quantization of a validated fragment (`mlab::arith::quantize_dithered`
 /// docs, used by the unbiased arithmetic for faint fragments): `floor(v * 255 + u)` per
-/// channel and for alpha, one dither `u` ([`ref_fragment_dither`]) for all four.
-pub fn ref_quantize_dithered(color: [f32; 3], alpha: f32, depth: f32) -> Row {
-    let u = ref_fragment_dither(color, alpha, depth);
+/// channel and for alpha, one dither `u` ([`ref_fragment_dither`] of the hash `h`) for all
+/// four.
+pub fn ref_quantize_dithered(color: [f32; 3], alpha: f32, depth: f32, h: u32) -> Row {
+    let u = ref_fragment_dither(h);
     Row::new(color.map(|c| ref_byte(c, u)), 255 - ref_byte(alpha, u), depth)
 }
 
@@ -87,32 +91,79 @@ pub fn ref_byte(v: f32, u: f32) -> u8 {
     b as u8
 }
 
-/// The 16-bit mix of both dithers (`mlab::arith::mix16` docs): `x` folded to 16 bits
-/// (`x ^ x >> 16`, low half) times `0x6a09`, modulo `2^16`.
-pub fn ref_mix16(x: u32) -> u64 {
-    let folded = u64::from((x ^ (x >> 16)) & 0xffff);
-    folded * 0x6a09 % 65536
+/// `lowbias32` (`mlab::lowbias32` docs), step by step in 64-bit arithmetic reduced
+/// modulo `2^32`.
+pub fn ref_lowbias32(x: u32) -> u32 {
+    let m = |a: u64, k: u64| (a * k) % (1 << 32);
+    let mut v = u64::from(x);
+    v ^= v >> 16;
+    v = m(v, 0x7feb_352d);
+    v ^= v >> 15;
+    v = m(v, 0x846c_a68b);
+    v ^= v >> 16;
+    v as u32
 }
 
-/// The dither of the unbiased merge, in `0..=254` (`mlab::arith::merge_dither` docs): the
-/// XOR of the four little-endian words of the two rows, mixed, scaled by
-/// `floor(s * 255 / 65536)`.
-pub fn ref_merge_dither(front: Row, back: Row) -> u32 {
-    let word = |r: Row, i: usize| {
-        let b = r.to_bytes();
-        u32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]])
-    };
-    let x = word(front, 0) ^ word(front, 1) ^ word(back, 0) ^ word(back, 1);
-    (ref_mix16(x) * 255 / 65536) as u32
+/// The hash of a fragment of key `key` in pixel `pixel` (`mlab::fragment_hash` docs):
+/// `lowbias32(key ^ lowbias32(pixel))`.
+pub fn ref_fragment_hash(key: u32, pixel: u32) -> u32 {
+    ref_lowbias32(key ^ ref_lowbias32(pixel))
+}
+
+/// The key of a fragment (`mlab::Fragment::hash` docs): its stable key, or the XOR of the
+/// f32 bits of its premultiplied R, G, B, alpha and depth.
+pub fn ref_key(f: &Fragment) -> u32 {
+    let c = f.color().to_array();
+    f.key()
+        .unwrap_or(c[0].to_bits() ^ c[1].to_bits() ^ c[2].to_bits() ^ f.alpha().to_bits() ^ f.depth().to_bits())
+}
+
+/// The hash of an inserted row (`mlab::mlab::row_hash` docs): the key is the XOR of its
+/// two little-endian words.
+pub fn ref_row_hash(row: Row, pixel: u32) -> u32 {
+    let b = row.to_bytes();
+    let w0 = u32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    let w1 = u32::from_le_bytes([b[4], b[5], b[6], b[7]]);
+    ref_fragment_hash(w0 ^ w1, pixel)
+}
+
+/// The dither of the unbiased merge, in `0..=254` (`mlab::arith::merge_dither` docs):
+/// `floor((h mod 2^16) * 255 / 65536)`.
+pub fn ref_merge_dither(h: u32) -> u32 {
+    (u64::from(h % 65536) * 255 / 65536) as u32
 }
 
 /// The dither of the dithered fragment quantization (`mlab::arith::fragment_dither` docs):
-/// `u = (h + 0.5) / 256`, `h` the high byte of the mix of the XOR of the f32 bits of the
-/// premultiplied R, G, B, alpha and depth.
-pub fn ref_fragment_dither(color: [f32; 3], alpha: f32, depth: f32) -> f32 {
-    let x = color[0].to_bits() ^ color[1].to_bits() ^ color[2].to_bits() ^ alpha.to_bits() ^ depth.to_bits();
-    let h = ref_mix16(x) / 256;
-    (h as f32 + 0.5) / 256.0
+/// `u = (floor(h / 2^24) + 0.5) / 256`.
+pub fn ref_fragment_dither(h: u32) -> f32 {
+    ((h / (1 << 24)) as f32 + 0.5) / 256.0
+}
+
+/// The position of an f32 in IEEE order as an unsigned key (`docs/layout.md`):
+/// `bits | 2^31` for a positive sign, `!bits` for a negative one.
+pub fn ref_depth_order(bits: u32) -> u64 {
+    u64::from(if bits >> 31 == 1 { !bits } else { bits | 0x8000_0000 })
+}
+
+/// The depth of the unbiased merge (`mlab::arith::centroid_depth` docs): with the back row's
+/// share of the merged opacity `w = floor(65535 * (255 - T_b) T_f / (65025 - T_f T_b))`
+/// (0 when `T_f < 160` or the share is 0), the key moved from the front's toward the
+/// back's by `floor((K_b - K_f) w / 65536)` when the back's key is larger; in u64.
+pub fn ref_centroid_depth(front: Row, back: Row) -> f32 {
+    let (f, b) = (front.to_bytes(), back.to_bytes());
+    let (t_f, t_b) = (u64::from(f[3]), u64::from(b[3]));
+    let cb = (255 - t_b) * t_f;
+    let w = if t_f < 160 || cb == 0 {
+        0
+    } else {
+        65535 * cb / (255 * (255 - t_f) + cb)
+    };
+    let (kf, kb) = (ref_depth_order(front.words()[1]), ref_depth_order(back.words()[1]));
+    if kb <= kf {
+        return front.depth();
+    }
+    let k = (kf + (kb - kf) * w / 65536) as u32;
+    f32::from_bits(if k >> 31 == 1 { k & 0x7fff_ffff } else { !k })
 }
 
 /// `round(a * b / 255)` in f64 (ties cannot occur: 255 is odd).
@@ -129,17 +180,17 @@ pub fn ref_merge(front: Row, back: Row) -> Row {
 }
 
 /// The unbiased Eq. 7 and 8 on bytes (`mlab::Unbiased::merge` docs), with
-/// `d = ref_merge_dither(front, back)`: `T = floor((T_f T_b + d) / 255)`,
-/// `A = min(255, A_f + floor((A_b T_f + 254 - d) / 255))`, `z = z_f`; plain integer
-/// division.
-pub fn ref_merge_unbiased(front: Row, back: Row) -> Row {
+/// `d = ref_merge_dither(h)`: `T = floor((T_f T_b + d) / 255)`,
+/// `A = min(255, A_f + floor((A_b T_f + 254 - d) / 255))`, `z` = [`ref_centroid_depth`];
+/// plain integer division.
+pub fn ref_merge_unbiased(front: Row, back: Row, h: u32) -> Row {
     let f = front.to_bytes();
     let b = back.to_bytes();
-    let d = ref_merge_dither(front, back);
+    let d = ref_merge_dither(h);
     let t_f = u32::from(f[3]);
     let add = |i: usize| (u32::from(f[i]) + (u32::from(b[i]) * t_f + 254 - d) / 255).min(255) as u8;
     let t = ((t_f * u32::from(b[3]) + d) / 255) as u8;
-    Row::from_bytes([add(0), add(1), add(2), t, f[4], f[5], f[6], f[7]])
+    Row::new([add(0), add(1), add(2)], t, ref_centroid_depth(front, back))
 }
 
 impl Model for Paper {
@@ -147,7 +198,7 @@ impl Model for Paper {
     const DELTA: f64 = crate::DELTA;
     const TAIL: TailLayout = PAPER_TAIL;
 
-    fn ref_merge(front: Row, back: Row) -> Row {
+    fn ref_merge(front: Row, back: Row, _h: u32) -> Row {
         ref_merge(front, back)
     }
 }
@@ -157,16 +208,16 @@ impl Model for Unbiased {
     const DELTA: f64 = crate::DELTA_UNBIASED;
     const TAIL: TailLayout = WIDE_TAIL;
 
-    fn ref_merge(front: Row, back: Row) -> Row {
-        ref_merge_unbiased(front, back)
+    fn ref_merge(front: Row, back: Row, h: u32) -> Row {
+        ref_merge_unbiased(front, back, h)
     }
 
     /// To nearest, except faint fragments ([`is_faint`]): [`ref_quantize_dithered`].
-    fn ref_quantize(color: [f32; 3], alpha: f32, depth: f32) -> Row {
+    fn ref_quantize(color: [f32; 3], alpha: f32, depth: f32, h: u32) -> Row {
         if is_faint(alpha) {
-            ref_quantize_dithered(color, alpha, depth)
+            ref_quantize_dithered(color, alpha, depth, h)
         } else {
-            Paper::ref_quantize(color, alpha, depth)
+            Paper::ref_quantize(color, alpha, depth, h)
         }
     }
 
@@ -185,7 +236,7 @@ impl Model for Unbiased {
 pub struct RefMlab {
     m: usize,
     rows: Vec<Row>,
-    merge: fn(Row, Row) -> Row,
+    merge: fn(Row, Row, u32) -> Row,
 }
 
 impl RefMlab {
@@ -198,8 +249,8 @@ impl RefMlab {
         }
     }
 
-    /// Insert a row with a finite depth.
-    pub fn insert(&mut self, row: Row) {
+    /// Insert a row with a finite depth, of hash `h` (the inserted fragment's).
+    pub fn insert(&mut self, row: Row, h: u32) {
         let pos = self
             .rows
             .iter()
@@ -209,7 +260,7 @@ impl RefMlab {
         if self.rows.len() > self.m {
             let back = self.rows.pop().unwrap();
             let front = self.rows.pop().unwrap();
-            self.rows.push((self.merge)(front, back));
+            self.rows.push((self.merge)(front, back, h));
         }
     }
 
@@ -415,10 +466,28 @@ mod tests {
         let back = Row::new([0, 200, 0], 0, 2.0);
         assert_eq!(ref_merge(front, back), Row::new([100, 100, 0], 0, 1.0));
         // `merge` docs (unbiased): 200 * 128 / 255 = 100.39 rounds to 100 or 101.
-        let m = ref_merge_unbiased(front, back);
+        // T_front 128 is below the centroid threshold (160): the depth stays the front's.
+        let m = ref_merge_unbiased(front, back, 0x1234_5678);
         assert_eq!((m.transmittance(), m.depth()), (0, 1.0));
         assert!(m.color()[1] == 100 || m.color()[1] == 101);
-        assert_eq!(ref_merge_unbiased(front, Row::EMPTY), front);
+        assert_eq!(ref_merge_unbiased(front, Row::EMPTY, 7), front);
+        // T_front 204 (alpha 0.2) over an opaque back: the back's share of the opacity is
+        // 0.8 / (0.2 + 0.8), w = floor(65535 * 204 * 255 / (255 * 51 + 204 * 255)) = 52428,
+        // and 1.0 -> 2.0 is 2^23 keys: z = 1.0 + floor(2^23 * 52428 / 65536) / 2^23.
+        let m = ref_merge_unbiased(Row::new([10, 0, 0], 204, 1.0), back, 0);
+        assert_eq!(m.depth(), 1.0 + ((8_388_608u64 * 52_428 / 65_536) as f32) / 8_388_608.0);
+    }
+
+    #[test]
+    fn lowbias32_and_the_hash() {
+        // Bijective on a sample, 0 fixed, the hash the composition of the docs.
+        assert_eq!(ref_lowbias32(0), 0);
+        assert_eq!(ref_lowbias32(1), mlab::lowbias32(1));
+        let mut seen = std::collections::HashSet::new();
+        for x in 0..100_000u32 {
+            assert!(seen.insert(ref_lowbias32(x.wrapping_mul(2_654_435_761))));
+        }
+        assert_eq!(ref_fragment_hash(5, 9), ref_lowbias32(5 ^ ref_lowbias32(9)));
     }
 
     #[test]
@@ -429,13 +498,8 @@ mod tests {
             hist[(s * 255 / 65536) as usize] += 1;
         }
         assert!(hist.iter().all(|&n| n == 257 || n == 258));
-        // The mix is a bijection of the folded 16 bits (odd multiplier).
-        let mut seen = vec![false; 65536];
-        for x in 0..65536u32 {
-            let s = ref_mix16(x) as usize;
-            assert!(!seen[s]);
-            seen[s] = true;
-        }
+        assert_eq!(ref_merge_dither(0xffff_0000), 0);
+        assert_eq!(ref_merge_dither(0x0000_ffff), 254);
     }
 
     #[test]
@@ -460,7 +524,8 @@ mod tests {
             let k = x % 256;
             let v = k as f32 / 255.0;
             let c = [v, (x >> 8) as f32 / u32::MAX as f32, 0.0];
-            let u = ref_fragment_dither(c, v, (x >> 3) as f32);
+            let _ = c;
+            let u = ref_fragment_dither(x.rotate_left(5));
             assert!((1.0 / 512.0..=511.0 / 512.0).contains(&u), "{u}");
             // A value that is a byte quantizes to that byte.
             assert_eq!(u32::from(ref_byte(v, u)), k);

@@ -9,7 +9,8 @@ use core::marker::PhantomData;
 
 use super::pixel::Pixel;
 use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
-use crate::lanes::{LANES, LANES_U32, ResolvedLanes};
+use crate::lanes::{self, LANES, LANES_U32, ResolvedLanes};
+use crate::mlab::row_hash;
 use crate::resolve::{Background, Resolved, int, to_rgba16f};
 use crate::row::Row;
 use glam::Vec4;
@@ -45,9 +46,17 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
     #[doc(hidden)]
     fn slot_of(i: usize, n: usize) -> usize;
     #[doc(hidden)]
-    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row);
+    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32);
     #[doc(hidden)]
-    fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8);
+    fn insert_span<P: Pixel>(
+        rows: &mut [Row],
+        d: Dims,
+        x: u32,
+        y: u32,
+        span: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    );
     /// The storage of span `span` of line `y` (1 to 8 consecutive pixels, or one stored
     /// span), if it exists.
     #[doc(hidden)]
@@ -67,7 +76,7 @@ fn unit_mut(rows: &mut [Row], i: usize, n: usize) -> Option<&mut [Row]> {
 }
 
 /// The lanes of a span insert, rotated so that lane `i` sits at `(i + shift) % 8`.
-fn rotate(rows: &[Row; LANES], shift: usize) -> [Row; LANES] {
+fn rotate<T: Copy>(rows: &[T; LANES], shift: usize) -> [T; LANES] {
     let mut r = *rows;
     r.rotate_right(shift);
     r
@@ -98,18 +107,26 @@ impl Arrangement for PixelMajor {
     }
 
     #[inline(always)]
-    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row) {
+    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32) {
         if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), P::ROWS) {
-            P::pm_insert(px, row);
+            P::pm_insert(px, row, h);
         }
     }
 
     #[inline(always)]
-    fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8) {
+    fn insert_span<P: Pixel>(
+        rows: &mut [Row],
+        d: Dims,
+        x: u32,
+        y: u32,
+        span: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    ) {
         let first = d.index_unchecked(x, y);
         let valid = d.lanes_inside(x);
         if let Some(px) = rows.get_mut(first * P::ROWS..(first + valid) * P::ROWS) {
-            P::insert_unit::<Self>(px, span, mask);
+            P::insert_unit::<Self>(px, span, hashes, mask);
         }
     }
 
@@ -139,10 +156,10 @@ impl Arrangement for Spans {
     }
 
     #[inline(always)]
-    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row) {
+    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32) {
         let (i, lane) = d.span_lane(x, y);
         if let Some(s) = unit_mut(rows, i, LANES * P::ROWS) {
-            P::span_insert(s, lane, row);
+            P::span_insert(s, lane, row, h);
         }
     }
 
@@ -153,20 +170,32 @@ impl Arrangement for Spans {
         clippy::cast_possible_truncation,
         reason = "the two bytes of the mask shifted into 16 bits"
     )]
-    fn insert_span<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, span: &[Row; LANES], mask: u8) {
+    fn insert_span<P: Pixel>(
+        rows: &mut [Row],
+        d: Dims,
+        x: u32,
+        y: u32,
+        span: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    ) {
         let (i, shift) = d.span_lane(x, y);
         let wide = (mask as u16) << shift;
         let (m0, m1) = (wide as u8, (wide >> 8) as u8);
-        let span = if shift == 0 { *span } else { rotate(span, shift) };
+        let (span, hashes) = if shift == 0 {
+            (*span, *hashes)
+        } else {
+            (rotate(span, shift), rotate(hashes, shift))
+        };
         if m0 != 0
             && let Some(s) = unit_mut(rows, i, LANES * P::ROWS)
         {
-            P::insert_unit::<Self>(s, &span, m0);
+            P::insert_unit::<Self>(s, &span, &hashes, m0);
         }
         if m1 != 0
             && let Some(s) = unit_mut(rows, i + 1, LANES * P::ROWS)
         {
-            P::insert_unit::<Self>(s, &span, m1);
+            P::insert_unit::<Self>(s, &span, &hashes, m1);
         }
     }
 
@@ -200,6 +229,9 @@ impl Arrangement for Spans {
 pub struct Grid<'a, P: Pixel, L: Arrangement> {
     rows: &'a mut [Row],
     dims: Dims,
+    /// The id of pixel `(0, 0)`: 0, or the first line's in a band (`line * width`), so that a
+    /// band hashes its fragments as the whole framebuffer does ([`Fragment::hash`](crate::Fragment::hash)).
+    first: u32,
     kind: PhantomData<(P, L)>,
 }
 
@@ -228,6 +260,7 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
         Ok(Grid {
             rows: storage,
             dims: Dims::new(width, height),
+            first: 0,
             kind: PhantomData,
         })
     }
@@ -337,16 +370,48 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
 
     #[inline(always)]
     fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError> {
-        self.dims.check(x, y)?;
-        L::insert::<P>(self.rows, self.dims, x, y, row);
-        Ok(())
+        let h = if P::MERGES {
+            row_hash(row, self.pixel_id(x, y))
+        } else {
+            0
+        };
+        self.insert_hashed(x, y, row, h)
     }
 
     #[inline(always)]
     fn insert_span(&mut self, x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError> {
+        let hashes = if P::MERGES {
+            lanes::row_hashes(rows, self.pixel_id(x, y))
+        } else {
+            [0; LANES]
+        };
+        self.insert_span_hashed(x, y, rows, &hashes, mask)
+    }
+
+    #[inline(always)]
+    fn first_pixel(&self) -> u32 {
+        self.first
+    }
+
+    #[inline(always)]
+    fn insert_hashed(&mut self, x: u32, y: u32, row: Row, h: u32) -> Result<(), FramebufferError> {
+        self.dims.check(x, y)?;
+        L::insert::<P>(self.rows, self.dims, x, y, row, h);
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn insert_span_hashed(
+        &mut self,
+        x: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    ) -> Result<(), FramebufferError> {
         self.dims.check_span(x, y, mask)?;
         if mask != 0 {
-            L::insert_span::<P>(self.rows, self.dims, x, y, rows, mask);
+            L::insert_span::<P>(self.rows, self.dims, x, y, rows, hashes, mask);
         }
         Ok(())
     }
@@ -403,6 +468,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         Grid {
             rows: self.rows,
             dims: self.dims,
+            first: self.first,
             kind: PhantomData,
         }
     }
@@ -412,12 +478,14 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
         let at = (lines as usize * line_rows).min(self.rows.len());
         let (a, b) = self.rows.split_at_mut(at);
-        let band = |rows, height| Grid {
+        let band = |rows, height, first| Grid {
             rows,
             dims: Dims { height, ..self.dims },
+            first,
             kind: PhantomData,
         };
-        (band(a, lines), band(b, self.dims.height - lines))
+        let second = self.first.wrapping_add(lines.wrapping_mul(self.dims.width));
+        (band(a, lines, self.first), band(b, self.dims.height - lines, second))
     }
 }
 

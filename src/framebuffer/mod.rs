@@ -234,11 +234,6 @@ pub(crate) const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
     transmittance: [1.0; LANES],
 };
 
-/// The background's RGBA8 on 8 lanes (a span that does not exist).
-pub(crate) fn clear_rgba8(bg: Background) -> [[u8; 4]; LANES] {
-    [crate::to_rgba8(Resolved::CLEAR.pixel(bg)); LANES]
-}
-
 /// What every framebuffer offers, whatever its method (MLAB or HT), its arrangement
 /// (pixel-major or spans), its size (compile time or [run time](crate::DynFramebuffer)) and
 /// its arithmetic.
@@ -291,7 +286,8 @@ pub trait Framebuffer {
     /// Reset every pixel to empty (empty rows, empty tails; padding lanes included).
     fn clear(&mut self);
 
-    /// Insert a quantized row at `(x, y)` (Listing 1 or 2).
+    /// Insert a quantized row at `(x, y)` (Listing 1 or 2); the merge is seeded by the row's
+    /// content ([`row_hash`](crate::mlab::row_hash) of [`pixel_id`](Self::pixel_id)).
     fn insert_row(&mut self, x: u32, y: u32, row: Row) -> Result<(), FramebufferError>;
 
     /// Insert one row per lane at pixels `(x + i, y)` for the lanes set in `mask` (Listing 1
@@ -318,10 +314,54 @@ pub trait Framebuffer {
     where
         Self: Sized;
 
-    /// Insert a fragment at `(x, y)`, quantized by [`Self::Arith`](Arithmetic::quantize).
+    /// The id of pixel `(x, y)` in the hashes that seed the dithers
+    /// ([`Fragment::hash`], `docs/layout.md`): `first + y * width + x` (wrapping), where
+    /// `first` is 0 for a whole framebuffer and the id of a band's first pixel for a band
+    /// ([`bands_mut`](Self::bands_mut)), so that bands insert the same bytes as the whole.
+    #[inline(always)]
+    fn pixel_id(&self, x: u32, y: u32) -> u32 {
+        self.first_pixel()
+            .wrapping_add(y.wrapping_mul(self.width()))
+            .wrapping_add(x)
+    }
+
+    /// The id of pixel `(0, 0)` ([`pixel_id`](Self::pixel_id)): 0 unless this is a band.
+    #[inline(always)]
+    fn first_pixel(&self) -> u32 {
+        0
+    }
+
+    /// Insert a quantized row at `(x, y)` whose merge is seeded by `h`, the hash of the
+    /// fragment it was quantized from ([`Fragment::hash`] of [`pixel_id`](Self::pixel_id)).
+    /// This default, for a framebuffer of another crate, is [`insert_row`](Self::insert_row).
+    #[inline(always)]
+    fn insert_hashed(&mut self, x: u32, y: u32, row: Row, h: u32) -> Result<(), FramebufferError> {
+        let _ = h;
+        self.insert_row(x, y, row)
+    }
+
+    /// [`insert_span`](Self::insert_span) with each lane's merge seeded by `hashes[i]` (as
+    /// [`insert_hashed`](Self::insert_hashed)). This default, for a framebuffer of another
+    /// crate, is [`insert_span`](Self::insert_span).
+    #[inline(always)]
+    fn insert_span_hashed(
+        &mut self,
+        x: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    ) -> Result<(), FramebufferError> {
+        let _ = hashes;
+        self.insert_span(x, y, rows, mask)
+    }
+
+    /// Insert a fragment at `(x, y)`, quantized by [`Self::Arith`](Arithmetic::quantize)
+    /// with its hash in this pixel ([`Fragment::hash`] of [`pixel_id`](Self::pixel_id)).
     #[inline(always)]
     fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
-        self.insert_row(x, y, <Self::Arith as Arithmetic>::quantize(fragment))
+        let h = fragment.hash(self.pixel_id(x, y));
+        self.insert_hashed(x, y, <Self::Arith as Arithmetic>::quantize(fragment, h), h)
     }
 
     /// Validate, quantize and insert one fragment per lane, premultiplied color
@@ -412,12 +452,13 @@ fn insert_fragments<F: Framebuffer + ?Sized>(
     straight: bool,
 ) -> SpanInsert {
     Dims::new(fb.width(), fb.height()).check_span(x, y, mask)?;
+    let first = fb.pixel_id(x, y);
     let q = if straight {
-        fragments.quantize_straight_with::<F::Arith>(mask)
+        fragments.quantize_straight_at::<F::Arith>(mask, first)
     } else {
-        fragments.quantize_with::<F::Arith>(mask)
+        fragments.quantize_at::<F::Arith>(mask, first)
     };
-    fb.insert_span(x, y, &q.rows, q.valid)?;
+    fb.insert_span_hashed(x, y, &q.rows, &q.hashes, q.valid)?;
     Ok(InvalidLanes(q.invalid))
 }
 

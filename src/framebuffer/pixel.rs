@@ -11,7 +11,7 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::{Arrangement, CLEAR_LANES, Layers, clear_rgba8};
+use super::{Arrangement, CLEAR_LANES, Layers};
 use crate::arith::{Arithmetic, Unbiased};
 use crate::hybrid::{self, TailFormat};
 use crate::lanes::{self, LANES, ResolvedLanes};
@@ -50,6 +50,10 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// `docs/performance.md`): not for HT, whose gather/insert/scatter has no merge to share.
     #[doc(hidden)]
     const PIXEL_MAJOR_SPAN_INSERTS_PAY: bool;
+    /// Whether its insert merges rows (MLAB), which reads the fragments' hashes; HT's
+    /// inserts of quantized rows do not.
+    #[doc(hidden)]
+    const MERGES: bool;
     /// Whether the pixel-major RGBA8 resolve walks whole spans in the line loop (see the
     /// HT implementation for where it does not).
     #[doc(hidden)]
@@ -71,15 +75,15 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     fn empty_slot(j: usize) -> Row;
     /// Listing 1 or 2 on one pixel-major pixel (`px`: its `ROWS` slots).
     #[doc(hidden)]
-    fn pm_insert(px: &mut [Row], row: Row);
+    fn pm_insert(px: &mut [Row], row: Row, h: u32);
     /// Listing 1 or 2 on lane `lane` of a stored span (`8 * ROWS` rows, layer-major).
     #[doc(hidden)]
-    fn span_insert(span: &mut [Row], lane: usize, row: Row);
+    fn span_insert(span: &mut [Row], lane: usize, row: Row, h: u32);
     /// A span insert, for the lanes set in `mask`, into the storage `unit` of one span in the
     /// arrangement `L`: a stored span, or 1 to 8 consecutive pixel-major pixels (the lanes
     /// past them are off).
     #[doc(hidden)]
-    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], mask: u8);
+    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8);
     /// The f32 resolve of the storage of one span (as for `insert_unit`), lanes past its
     /// pixels clear.
     #[doc(hidden)]
@@ -99,9 +103,7 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// The RGBA8 of 8 empty pixels (a span that does not exist), as this kind's RGBA8
     /// resolve writes an empty pixel.
     #[doc(hidden)]
-    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
-        clear_rgba8(background)
-    }
+    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES];
 }
 
 /// Gather rows `offset..offset + N` of each pixel of `px` (`stride` rows per pixel, at most
@@ -194,6 +196,7 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     };
     const LAYERS: Layers = Layers::Mlab(M);
     const PIXEL_MAJOR_SPAN_INSERTS_PAY: bool = true;
+    const MERGES: bool = true;
 
     fn resolve(value: &[Row; M]) -> Resolved {
         resolve_rows(value)
@@ -216,9 +219,9 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     }
 
     #[inline(always)]
-    fn pm_insert(px: &mut [Row], row: Row) {
+    fn pm_insert(px: &mut [Row], row: Row, h: u32) {
         if let Some(p) = px.first_chunk_mut::<M>() {
-            mlab::insert_with::<A, M>(p, row);
+            mlab::insert_hashed::<A, M>(p, row, h);
         }
     }
 
@@ -226,13 +229,13 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     /// scalar code, scattered back (the faster of the two on each, `docs/performance.md`).
     /// The same rows either way.
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
-    fn span_insert(span: &mut [Row], lane: usize, row: Row) {
+    fn span_insert(span: &mut [Row], lane: usize, row: Row, h: u32) {
         if let Some(l) = layers_mut::<M>(span) {
             if cfg!(target_feature = "avx") {
-                lanes::mlab_insert_with::<A, M>(l, &[row; LANES], 1 << (lane % LANES));
+                lanes::mlab_insert_hashed::<A, M>(l, &[row; LANES], &[h; LANES], 1 << (lane % LANES));
             } else {
                 let mut px = lane_rows(l, lane);
-                mlab::insert_with::<A, M>(&mut px, row);
+                mlab::insert_hashed::<A, M>(&mut px, row, h);
                 set_lane_rows(l, lane, px);
             }
         }
@@ -241,13 +244,13 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     /// Pixel-major: the pixels gathered into a layer-major span, inserted in lanes, the
     /// lanes that are on scattered back.
     #[inline(always)]
-    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], mask: u8) {
+    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
         if !L::SPANS {
             let mut span = gather::<M>(unit, M, 0, Row::EMPTY);
-            lanes::mlab_insert_with::<A, M>(&mut span, rows, mask);
+            lanes::mlab_insert_hashed::<A, M>(&mut span, rows, hashes, mask);
             scatter::<M>(unit, M, 0, mask, &span);
         } else if let Some(l) = layers_mut::<M>(unit) {
-            lanes::mlab_insert_with::<A, M>(l, rows, mask);
+            lanes::mlab_insert_hashed::<A, M>(l, rows, hashes, mask);
         }
     }
 
@@ -282,8 +285,10 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
 
     /// The integer resolve of an empty pixel (`resolve::int`), which for a background that
     /// is not a byte value may differ from [`crate::to_rgba8`] of it by one step.
+    /// An empty pixel's integer resolve (its `M` empty rows: a span outside writes what an
+    /// empty pixel does).
     fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
-        [crate::resolve::int::rgba8(&[], background); LANES]
+        [crate::resolve::int::rgba8(&[Row::EMPTY; M], background); LANES]
     }
 }
 
@@ -359,6 +364,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     const ROWS: usize = K + 1;
     const LAYERS: Layers = Layers::Hybrid(K);
     const PIXEL_MAJOR_SPAN_INSERTS_PAY: bool = false;
+    const MERGES: bool = false;
     /// Without AVX2 and above `K = 4` the resolve goes span by span: the whole-span loop took
     /// 11 % longer there (`docs/performance.md`).
     const PIXEL_MAJOR_LINE_LOOP: bool = K <= 4 || cfg!(target_feature = "avx2");
@@ -385,7 +391,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     }
 
     #[inline(always)]
-    fn pm_insert(px: &mut [Row], row: Row) {
+    fn pm_insert(px: &mut [Row], row: Row, _: u32) {
         if let Some((t, h)) = px.split_last_mut()
             && let Ok(head) = <&mut [Row; K]>::try_from(h)
         {
@@ -398,7 +404,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     /// The pixel's head rows and tail gathered, Listing 2 in scalar code, scattered back:
     /// one pixel does not pay for eight lanes (`docs/performance.md`).
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
-    fn span_insert(span: &mut [Row], lane: usize, row: Row) {
+    fn span_insert(span: &mut [Row], lane: usize, row: Row, _: u32) {
         if let Some((head, tails)) = Self::parts_mut(span)
             && let Some(tail) = tails.get_mut(lane)
         {
@@ -411,7 +417,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     /// Pixel-major: the pixels' heads and tails gathered, inserted in lanes, the lanes that
     /// are on scattered back.
     #[inline(always)]
-    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], mask: u8) {
+    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], _: &[u32; LANES], mask: u8) {
         if L::SPANS {
             if let Some((head, tails)) = Self::parts_mut(unit) {
                 lanes::hybrid_insert_parts(head, tails, rows, mask);
@@ -441,7 +447,8 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     }
 
     /// The integer resolve of an empty pixel (as MLAB's: an empty tail adds nothing).
+    /// An empty pixel's integer resolve (empty head rows, empty tail).
     fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
-        [crate::resolve::int::rgba8(&[], background); LANES]
+        [crate::resolve::int::ht_rgba8(&[Row::EMPTY; K], A::Tail::EMPTY, background); LANES]
     }
 }

@@ -41,10 +41,11 @@
 //!     color: [[0.4; 8], [0.0; 8], [0.0; 8]],
 //!     alpha: [0.6; 8],
 //!     depth: [1.0, 2.0, 3.0, f32::NAN, 5.0, 6.0, 7.0, 8.0],
+//!     key: Some([10, 11, 12, 13, 14, 15, 16, 17]), // the primitives' ids
 //! };
-//! let q = frags.quantize_with::<mlab::Unbiased>(0b0111_1111); // validate, quantize
+//! let q = frags.quantize_at::<mlab::Unbiased>(0b0111_1111, 0); // validate, quantize: pixels 0..8
 //! assert_eq!(q.invalid, 0b0000_1000); // lane 3 has a NaN depth: reported, not inserted
-//! lanes::mlab_insert_with::<mlab::Unbiased, 4>(&mut span, &q.rows, q.valid);
+//! lanes::mlab_insert_hashed::<mlab::Unbiased, 4>(&mut span, &q.rows, &q.hashes, q.valid);
 //! assert_eq!(span[0][3], Row::EMPTY);
 //! assert_eq!(span[0][7], Row::EMPTY); // lane 7 was off
 //! assert_eq!(span[0][0], Row::new([102, 0, 0], 102, 1.0)); // 0.4 and 0.6 are exact bytes
@@ -109,17 +110,39 @@ impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
 }
 
 /// Listing 1 on 8 pixels in the arithmetic `A`: insert `rows[lane]` into pixel `lane` for
-/// every lane whose bit is set in `mask`. Byte-identical to
-/// [`crate::mlab::insert_with`]`::<A, M>` on each lane, for any rows.
-#[inline(always)] // a span insert is the inner loop of a rasterizer: never a call
+/// every lane whose bit is set in `mask`, each merge seeded by its row's content
+/// ([`crate::mlab::row_hash`] of pixel 0, as [`crate::mlab::insert_with`]). Byte-identical
+/// to [`crate::mlab::insert_with`]`::<A, M>` on each lane, for any rows.
+#[inline(always)]
 pub fn mlab_insert_with<A: Arithmetic, const M: usize>(span: &mut [[Row; LANES]; M], rows: &[Row; LANES], mask: u8) {
+    mlab_insert_hashed::<A, M>(span, rows, &x8::row_hashes(rows, 0, 0), mask);
+}
+
+/// Listing 1 on 8 pixels as [`mlab_insert_with`], lane `i`'s merge seeded by `hashes[i]`
+/// (the inserted fragment's hash, [`crate::Fragment::hash`]; what
+/// [`FragmentLanes::quantize_at`] returns with the rows). Byte-identical to
+/// [`crate::mlab::insert_hashed`]`::<A, M>` on each lane, for any rows.
+#[inline(always)] // a span insert is the inner loop of a rasterizer: never a call
+pub fn mlab_insert_hashed<A: Arithmetic, const M: usize>(
+    span: &mut [[Row; LANES]; M],
+    rows: &[Row; LANES],
+    hashes: &[u32; LANES],
+    mask: u8,
+) {
+    let d = x8::Dither8::new(hashes);
     // Full spans (the common case) skip the mask: with a constant all-ones mask the
     // compiler drops the ANDs and the final select.
     if mask == 0xff {
-        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::ALL);
+        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::ALL, d);
     } else {
-        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::from_bits(mask));
+        crate::mlab::insert_lanes::<A, _, _, M>(span, Rows8::load(rows), Mask8::from_bits(mask), d);
     }
+}
+
+/// [`crate::mlab::row_hash`] of 8 rows in the pixels of ids `first_pixel + lane` (wrapping).
+#[inline]
+pub fn row_hashes(rows: &[Row; LANES], first_pixel: u32) -> [u32; LANES] {
+    x8::row_hashes(rows, first_pixel, 1)
 }
 
 /// Listing 2 on 8 pixels. Byte-identical to [`crate::hybrid::insert`] on each lane.

@@ -17,6 +17,10 @@ use super::x8;
 /// let straight = FragmentLanes::from_rgba([[1.0, 0.5, 0.0, 0.5]; 8], [2.0; 8]);
 /// let q = straight.quantize_straight_with::<mlab::Unbiased>(0xff);
 /// assert_eq!(q.valid, 0xff);
+/// // With stable keys (the primitives' ids) for pixels 640..648 of a framebuffer:
+/// let keyed = FragmentLanes { key: Some([7; 8]), ..straight };
+/// let q = keyed.quantize_straight_at::<mlab::Unbiased>(0xff, 640);
+/// assert_eq!(q.hashes[1], mlab::fragment_hash(7, 641));
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FragmentLanes {
@@ -26,6 +30,9 @@ pub struct FragmentLanes {
     pub alpha: [f32; LANES],
     /// Depth per lane.
     pub depth: [f32; LANES],
+    /// The stable key per lane ([`crate::Fragment::with_key`]: the primitive's id), or `None`
+    /// for the content keys (which re-roll the dithers when the depth changes).
+    pub key: Option<[u32; LANES]>,
 }
 
 /// Rows quantized from [`FragmentLanes`], and which lanes were valid.
@@ -34,6 +41,10 @@ pub struct FragmentLanes {
 pub struct QuantizedLanes {
     /// The rows (lanes not in `valid` hold [`Row::EMPTY`]).
     pub rows: [Row; LANES],
+    /// The hash of each lane's fragment in its pixel ([`crate::Fragment::hash`]): what the
+    /// rows were quantized with, and what their insert merges with
+    /// ([`mlab_insert_hashed`](super::mlab_insert_hashed)). Unspecified in lanes not in `valid`.
+    pub hashes: [u32; LANES],
     /// Lanes that were on and valid.
     pub valid: u8,
     /// Lanes that were on and invalid: exactly the lanes where the scalar constructor
@@ -49,6 +60,7 @@ impl FragmentLanes {
             color: core::array::from_fn(|c| core::array::from_fn(|lane| rgba[lane][c])),
             alpha: core::array::from_fn(|lane| rgba[lane][3]),
             depth,
+            key: None,
         }
     }
 
@@ -58,22 +70,34 @@ impl FragmentLanes {
         color: [[0.0; LANES]; 3],
         alpha: [0.0; LANES],
         depth: [0.0; LANES],
+        key: None,
     };
 
     /// Validate and quantize premultiplied fragments as [`crate::Fragment::premultiplied`]
-    /// then [`Arithmetic::quantize`] would, lane by lane.
+    /// then [`Arithmetic::quantize`] would, lane by lane, as the fragments of pixels `0..8`
+    /// ([`quantize_at`](Self::quantize_at)).
     pub fn quantize_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<A>(mask, false)
+        self.quantize_at::<A>(mask, 0)
     }
 
     /// Validate and quantize straight-color fragments, as [`crate::Fragment::straight`] then
-    /// [`Arithmetic::quantize`] would (`color * alpha`, one f32 multiply).
+    /// [`Arithmetic::quantize`] would (`color * alpha`, one f32 multiply), as the fragments
+    /// of pixels `0..8`.
     pub fn quantize_straight_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
-        self.quantize_impl::<A>(mask, true)
+        self.quantize_straight_at::<A>(mask, 0)
     }
 
-    fn quantize_impl<A: Arithmetic>(&self, mask: u8, straight: bool) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, straight, true)
+    /// [`quantize_with`](Self::quantize_with) for lane `i` in the pixel of id
+    /// `first_pixel + i` (wrapping): the hashes are [`crate::Fragment::hash`] of those
+    /// pixels (`y * width + x` and its neighbours in a framebuffer, which passes them).
+    pub fn quantize_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
+        x8::quantize::<A>(self, mask, false, true, first_pixel)
+    }
+
+    /// [`quantize_straight_with`](Self::quantize_straight_with) in pixels
+    /// `first_pixel + i`, as [`quantize_at`](Self::quantize_at).
+    pub fn quantize_straight_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
+        x8::quantize::<A>(self, mask, true, true, first_pixel)
     }
 
     /// [`quantize_with`](Self::quantize_with) for lanes that hold validated
@@ -81,7 +105,7 @@ impl FragmentLanes {
     /// valid. For lanes that would fail a check the rows are unspecified (never UB, never a
     /// panic); the span batcher only holds fragments it took as `Fragment`s.
     #[inline]
-    pub(crate) fn quantize_validated_with<A: Arithmetic>(&self, mask: u8) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, false, false)
+    pub(crate) fn quantize_validated_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
+        x8::quantize::<A>(self, mask, false, false, first_pixel)
     }
 }

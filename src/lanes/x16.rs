@@ -109,26 +109,10 @@ impl Layer8 for Rows8 {
 /// masks are widened to whole lanes. Both give the same rows.
 const SIGN_SELECT: bool = cfg!(target_feature = "avx");
 
-/// [`crate::arith::merge_dither`] of eight row pairs: `d` of each pixel in both 16-bit slots
-/// of the low dword of its 64-bit lane (the high dwords are don't-care).
-#[inline(always)]
-fn merge_dither(front: u32x16, back: u32x16) -> u16x32 {
-    let f = front ^ back;
-    // word0 ^ word1 of each pair, in the low dword.
-    let x = f ^ cast::<u64x8, u32x16>(cast::<u32x16, u64x8>(f) >> 32);
-    // Both 16-bit slots of each dword = lo ^ hi (x ^ rotate(x, 16)), then the multiplicative
-    // mix, as in `x8::merge_dither8`.
-    let s: u16x32 = cast(x ^ ((x >> 16) | (x << 16)));
-    let m = cast::<u16x32, u32x16>(s * K) & u32x16::splat(0xffff);
-    // `(m * 255) >> 16` (0..=254) in 32-bit lanes, then in both 16-bit slots (`wide` has no
-    // 512-bit `pmulhuw`: see [`mul257_high`]).
-    let d = ((m << 8) - m) >> 16;
-    cast(d | (d << 16))
-}
-
 impl RowLanes for Rows8 {
     type Mask = Mask8;
     type Tail<T: TailFormat> = Rows8;
+    type Hash = [u32; LANES];
     #[inline(always)]
     fn depth_le(self, other: Self) -> Mask8 {
         let m = cast::<f32x16, u32x16>(cast::<u32x16, f32x16>(self.v).simd_le(cast::<u32x16, f32x16>(other.v)));
@@ -146,13 +130,21 @@ impl RowLanes for Rows8 {
         };
         Rows8 { v }
     }
+    /// MLAB runs on the 8-wide lanes of `x8.rs` (faster: `docs/performance.md`); these
+    /// lanes hold only Listing 2's span inserts, which never merge. This merge, for the
+    /// tests that run Listing 1 on both widths, is the paper's in SWAR and the scalar
+    /// [`Unbiased`](crate::Unbiased) merge lane by lane.
     #[inline(always)]
-    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
-        let v = match A::KIND {
-            Kind::Paper => merge4_paper(front.v, back.v),
-            Kind::Unbiased => merge4_unbiased(front.v, back.v, merge_dither(front.v, back.v)),
-        };
-        Rows8 { v }
+    fn merge<A: Arithmetic>(front: Self, back: Self, h: [u32; LANES]) -> Self {
+        match A::KIND {
+            Kind::Paper => Rows8 {
+                v: merge4_paper(front.v, back.v),
+            },
+            Kind::Unbiased => {
+                let (f, b) = (front.to_rows(), back.to_rows());
+                Rows8::from_rows(core::array::from_fn(|i| A::merge(f[i], b[i], h[i])))
+            }
+        }
     }
     #[inline(always)]
     fn tail_add<T: TailFormat>(tail: Rows8, row: Self) -> Rows8 {
@@ -225,8 +217,10 @@ mod tests {
             let mut narrow = wide;
             let rows = layer(rng);
             let m = mask(rng);
-            crate::mlab::insert_lanes::<A, _, _, M>(&mut wide, Rows8::load(&rows), Mask8::from_bits(m));
-            crate::mlab::insert_lanes::<A, _, _, M>(&mut narrow, x8::Rows8::load(&rows), x8::Mask8::from_bits(m));
+            let h: [u32; LANES] = core::array::from_fn(|_| rng.next() as u32);
+            crate::mlab::insert_lanes::<A, _, _, M>(&mut wide, Rows8::load(&rows), Mask8::from_bits(m), h);
+            let d = x8::Dither8::new(&h);
+            crate::mlab::insert_lanes::<A, _, _, M>(&mut narrow, x8::Rows8::load(&rows), x8::Mask8::from_bits(m), d);
             assert_eq!(wide, narrow, "M = {M}, mask {m:#x}, rows {rows:?}");
         }
     }
@@ -291,20 +285,6 @@ mod tests {
         for y in 0..=65280u32 {
             let got = mul257_high(u16x32::splat(y as u16)).to_array();
             assert!(got.iter().all(|&q| q as u32 == (y * 257) >> 16), "y = {y}");
-        }
-    }
-
-    /// [`merge_dither`] against [`crate::arith::merge_dither`] on random row pairs.
-    #[test]
-    fn merge_dither_matches_the_scalar_dither() {
-        let rng = &mut Rng(0x0123_4567_89ab_cdef);
-        for _ in 0..100_000 {
-            let (f, b) = (layer(rng), layer(rng));
-            let d: [u32; 16] = cast(merge_dither(cast(f), cast(b)));
-            for lane in 0..LANES {
-                let want = crate::arith::merge_dither(f[lane], b[lane]);
-                assert_eq!(d[2 * lane], want | want << 16, "rows {:?} {:?}", f[lane], b[lane]);
-            }
         }
     }
 }

@@ -87,15 +87,13 @@ macro_rules! swar {
             merge_result(front, div255_slots(even * t2), div255_slots(odd * t2))
         }
 
-        /// `MIX_K` in every slot: the multiplier of [`crate::arith::mix16`].
-        pub(super) const K: $u16 = $u16::splat($crate::arith::MIX_K as u16);
         /// Turns `d` in both slots into `[255 - d, d + 1]` (G slot, T slot): `(d ^ 0xffff) + 256`
         /// is `255 - d` modulo 2^16.
         pub(super) const ODD_XOR: $u16 = $u16::new($crate::lanes::x8::pairs(0xffff, 0));
         pub(super) const ODD_ADD: $u16 = $u16::new($crate::lanes::x8::pairs(256, 1));
 
-        /// The unbiased merge ([`Unbiased`](crate::Unbiased)) for the rows of one register, with their dither `d`
-        /// (one per row, as `merge_dither8` makes them): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
+        /// The colors and transmittance of the unbiased merge ([`Unbiased`](crate::Unbiased)) for the rows of one
+        /// register (the depth is the front's), with their dither `d` (one per row, in both 16-bit slots): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
         /// `d' = d` for T and `254 - d` for the colors.
         #[inline(always)]
         pub(super) fn merge4_unbiased(front: $u32, back: $u32, d: $u16) -> $u32 {
@@ -330,25 +328,90 @@ impl<const S: bool> Mask8<S> {
     }
 }
 
-/// [`crate::arith::merge_dither`] of eight row pairs at once: `d` of pixel `p` in both
-/// 16-bit slots of the low dword of its 64-bit lane, lanes 0-3 in the first register and
-/// 4-7 in the second (high dwords don't-care). The eight folds share one register for the
-/// mix (pixels 0-3 in the low dwords, 4-7 in the high dwords).
+/// The merge dithers of eight lanes ([`crate::arith::merge_dither`] of each lane's hash), as
+/// the merge reads them: `d` of lane `p` in both 16-bit slots of each dword of its 64-bit
+/// lane, lanes 0-3 in `a` and 4-7 in `b`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Dither8 {
+    a: u16x16,
+    b: u16x16,
+}
+
+impl Dither8 {
+    /// From the hashes of the eight inserted fragments.
+    #[inline(always)]
+    pub(super) fn new(h: &[u32; LANES]) -> Dither8 {
+        // `(h & 0xffff) * 255 >> 16` in the low slot of each dword (one `pmulhuw`), then in
+        // both slots.
+        let lo: u16x16 = cast(u32x8::new(*h) & u32x8::splat(0xffff));
+        let d: u32x8 = cast::<u16x16, u32x8>(lo.mul_keep_high(u16x16::splat(255)));
+        let both: u32x8 = d | (d << 16_u32);
+        let d: [u32; LANES] = both.to_array();
+        let spread = |i: usize| {
+            cast::<u32x8, u16x16>(u32x8::new([
+                d[i],
+                d[i],
+                d[i + 1],
+                d[i + 1],
+                d[i + 2],
+                d[i + 2],
+                d[i + 3],
+                d[i + 3],
+            ]))
+        };
+        Dither8 {
+            a: spread(0),
+            b: spread(4),
+        }
+    }
+}
+
+/// [`crate::arith::depth_key`] of the high dword of each 64-bit lane (the low dword gets the
+/// same map, don't-care): its own inverse.
 #[inline(always)]
-fn merge_dither8<const S: bool>(front: Lanes8<S>, back: Lanes8<S>) -> (u16x16, u16x16) {
-    let fa = front.a ^ back.a;
-    let fb = front.b ^ back.b;
-    // word0 ^ word1 of each pair: in the low dword for a, in the high dword for b.
-    let xa = fa ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(fa) >> 32);
-    let xb = fb ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(fb) << 32);
-    let x = HI.select(xb, xa);
-    // Both 16-bit slots of each dword = lo ^ hi (x ^ rotate(x, 16)), then the multiplicative
-    // mix. Written as a rotate, LLVM emits one byte shuffle where it can.
-    let s: u16x16 = cast(x ^ ((x >> 16) | (x << 16)));
-    let s: u16x16 = s * K;
-    let d = s.mul_keep_high(u16x16::splat(255)); // 0..=254
-    let db = cast::<u64x4, u16x16>(cast::<u16x16, u64x4>(d) >> 32);
-    (d, db)
+fn depth_keys(z: u32x8) -> u32x8 {
+    z ^ (cast::<i32x8, u32x8>(cast::<u32x8, i32x8>(z) >> 31) & u32x8::splat(0x7fff_ffff))
+}
+
+/// [`crate::arith::centroid_depth`] of the rows of one register (4 rows): the merged depth in
+/// the high dword of each 64-bit lane (the low dwords are don't-care).
+///
+/// The weight `floor(65535 * cb / den)` is estimated in f32 (`cb / den * 65535`, within
+/// `2^-7` of the quotient, so truncated it is the floor or one off) and corrected once each
+/// way by the sign of the remainder `65535 * cb - q * den` (exact in 32 bits: `q * den` from
+/// 16-bit products), so it is the integer floor on every backend. The depth step
+/// `floor(diff * w / 65536)` is two 16-bit products of the key difference's halves.
+#[inline(always)]
+fn centroid4(front: u32x8, back: u32x8) -> u32x8 {
+    let i = |v: u32x8| cast::<u32x8, i32x8>(v);
+    let u = |v: i32x8| cast::<i32x8, u32x8>(v);
+    let u16s = |v: u32x8| cast::<u32x8, u16x16>(v);
+    let u32s = |v: u16x16| cast::<u16x16, u32x8>(v);
+    // In the low dwords: T bytes, every value < 2^16 (the high dwords compute the same
+    // formulas on depth bits, in range, and are dropped).
+    let tf = front >> 24;
+    let tb = back >> 24;
+    let p = u32s(u16s(tf) * u16s(tb)); // T_f * T_b < 2^16: the low slot's product
+    let cb = (tf << 8) - tf - p; // 255 T_f - p = (255 - T_b) T_f
+    let den = u32x8::splat(65025) - p;
+    let den = den | (den.simd_eq(u32x8::ZERO) & u32x8::splat(1)); // 0 (and cb = 0) -> 1
+    let num = (cb << 16) - cb; // 65535 cb < 2^32
+    let est = f32x8::from_u(cb) / f32x8::from_u(den) * f32x8::splat(65535.0);
+    let q = u(est.fast_trunc_int());
+    let prod = u32s(u16s(q) * u16s(den)) | (u32s(u16s(q).mul_keep_high(u16s(den))) << 16);
+    let r = i(num - prod);
+    // q - 1 where r < 0, q + 1 where r >= den (a mask is -1).
+    let q = u(i(q) + r.simd_lt(i32x8::ZERO) - r.simd_gt(i(den) - i32x8::splat(1)));
+    let gate = i(tf).simd_gt(i32x8::splat(crate::arith::CENTROID_MIN_T as i32 - 1));
+    let w = q & u(gate);
+    // The weight in both slots of the high dword, beside the depth.
+    let w = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(w) << 32);
+    let w2 = u16s(w | (w << 16));
+    let (kf, kb) = (depth_keys(front), depth_keys(back));
+    let diff = u(i(kb) - i(kf)) & u(i(kb).simd_gt(i(kf)));
+    let d = u16s(diff);
+    let step = u32s(d.mul_keep_high(w2)) + (u32s(d * w2) >> 16);
+    depth_keys(u(i(kf) + i(step)))
 }
 
 impl<const S: bool> Lanes8<S> {
@@ -373,6 +436,7 @@ impl<const S: bool> Layer8 for Lanes8<S> {
 impl<const S: bool> RowLanes for Lanes8<S> {
     type Mask = Mask8<S>;
     type Tail<T: TailFormat> = Self;
+    type Hash = Dither8;
     #[inline(always)]
     fn depth_le(self, other: Self) -> Mask8<S> {
         let le = |x: u32x8, y: u32x8| {
@@ -417,17 +481,17 @@ impl<const S: bool> RowLanes for Lanes8<S> {
         }
     }
     #[inline(always)]
-    fn merge<A: Arithmetic>(front: Self, back: Self) -> Self {
+    fn merge<A: Arithmetic>(front: Self, back: Self, d: Dither8) -> Self {
         match A::KIND {
             Kind::Paper => Lanes8 {
                 a: merge4_paper(front.a, back.a),
                 b: merge4_paper(front.b, back.b),
             },
             Kind::Unbiased => {
-                let (da, db) = merge_dither8(front, back);
+                let m = |f: u32x8, b: u32x8, d: u16x16| lo_hi(merge4_unbiased(f, b, d), centroid4(f, b));
                 Lanes8 {
-                    a: merge4_unbiased(front.a, back.a, da),
-                    b: merge4_unbiased(front.b, back.b, db),
+                    a: m(front.a, back.a, d.a),
+                    b: m(front.b, back.b, d.b),
                 }
             }
         }
@@ -451,7 +515,13 @@ impl<const S: bool> RowLanes for Lanes8<S> {
 
 /// [`FragmentLanes::quantize_with`] and [`FragmentLanes::quantize_straight_with`].
 #[inline(always)]
-pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: bool, check: bool) -> QuantizedLanes {
+pub(super) fn quantize<A: Arithmetic>(
+    f: &FragmentLanes,
+    mask: u8,
+    straight: bool,
+    check: bool,
+    first_pixel: u32,
+) -> QuantizedLanes {
     let zero = f32x8::ZERO;
     let one = f32x8::ONE;
     let alpha = f32x8::new(f.alpha);
@@ -478,13 +548,24 @@ pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: boo
             ok &= out.simd_ge(zero) & out.simd_le(one);
         }
     }
+    // The hashes (`Fragment::hash`): the stable keys, or the content keys, of pixels
+    // `first_pixel + lane`.
+    let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
+    let key = match f.key {
+        Some(k) => u32x8::new(k),
+        None => bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth),
+    };
+    let pixel = u32x8::splat(first_pixel) + u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]);
+    let h = lowbias32_8(key ^ lowbias32_8(pixel));
     let half = f32x8::splat(0.5);
     let u = match A::KIND {
         Kind::Paper => half,
-        // Faint fragments dithered, the others to nearest (as `Unbiased::quantize`).
+        // Faint fragments dithered, the others to nearest (as `Unbiased::quantize`):
+        // `u = ((h >> 24) + 0.5) / 256`.
         Kind::Unbiased => {
             let faint = (alpha * f32x8::splat(255.0)).simd_lt(f32x8::splat(crate::arith::FAINT_BYTES));
-            faint.select(fragment_dither8(pre, alpha, depth), half)
+            let dither = (f32x8::from_u(h >> 24) + half) * f32x8::splat(1.0 / 256.0);
+            faint.select(dither, half)
         }
     };
     let bytes = pre.map(|c| quantize8(c, u));
@@ -503,20 +584,31 @@ pub(super) fn quantize<A: Arithmetic>(f: &FragmentLanes, mask: u8, straight: boo
     let z: [u32; LANES] = cast(on.select(cast(depth), u32x8::splat(e1)));
     QuantizedLanes {
         rows: core::array::from_fn(|i| Row::from_words([rgbt[i], z[i]])),
+        hashes: h.to_array(),
         valid,
         invalid: mask & !valid,
     }
 }
 
-/// [`crate::arith::fragment_dither`] for 8 lanes (16-bit mix in the low slot of each dword).
+/// [`crate::lowbias32`] of 8 lanes (32-bit lane multiplies).
 #[inline(always)]
-fn fragment_dither8(pre: [f32x8; 3], alpha: f32x8, depth: f32x8) -> f32x8 {
-    let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
-    let x = bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth);
-    let s: u16x16 = cast((x ^ (x >> 16)) & u32x8::splat(0xffff));
-    let s: u16x16 = s * K;
-    let h = cast::<u16x16, u32x8>(s >> 8) & u32x8::splat(0xff);
-    (f32x8::from_u(h) + f32x8::splat(0.5)) * f32x8::splat(1.0 / 256.0)
+pub(super) fn lowbias32_8(x: u32x8) -> u32x8 {
+    let x = (x ^ (x >> 16)) * u32x8::splat(0x7feb_352d);
+    let x = (x ^ (x >> 15)) * u32x8::splat(0x846c_a68b);
+    x ^ (x >> 16)
+}
+
+/// [`crate::mlab::row_hash`] of 8 rows in pixels `first_pixel + step * lane`.
+#[inline(always)]
+pub(super) fn row_hashes(rows: &[Row; LANES], first_pixel: u32, step: u32) -> [u32; LANES] {
+    let [a, b]: [u32x8; 2] = cast(*rows);
+    // word0 ^ word1 of rows 0-3 in the low dwords of `a`, of rows 4-7 in the high dwords of `b`.
+    let xa = a ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(a) >> 32);
+    let xb = b ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(b) << 32);
+    let [a, b] = [xa.to_array(), xb.to_array()];
+    let key = u32x8::new([a[0], a[2], a[4], a[6], b[1], b[3], b[5], b[7]]);
+    let pixel = u32x8::splat(first_pixel) + u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]) * u32x8::splat(step);
+    lowbias32_8(key ^ lowbias32_8(pixel)).to_array()
 }
 
 /// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`);
@@ -1003,7 +1095,7 @@ mod tests {
         for tf in 0..256 {
             for d0 in (0..255).step_by(4) {
                 let ds: [u32; 4] = core::array::from_fn(|i| (d0 + i as u32).min(254));
-                // `d` in both 16-bit slots of each row's low dword (as `merge_dither8` leaves it).
+                // `d` in both 16-bit slots of each row's low dword (as `Dither8` holds it).
                 let dv: u16x16 = cast(pack(ds.map(|d| (d | d << 16) as u64)));
                 for b in 0..256 {
                     let fr = [front(tf, b); 4];
@@ -1011,6 +1103,37 @@ mod tests {
                     for (i, &d) in ds.iter().enumerate() {
                         let want = merged(fr[i], back(b), |x, t| (x * t + 254 - d) / 255, |x, t| (x * t + d) / 255);
                         assert_eq!(got[i], want, "T_front {tf}, b {b}, d {d}");
+                    }
+                }
+            }
+        }
+    }
+
+    /// The lane centroid depth against the scalar [`crate::arith::centroid_depth`] for every
+    /// pair of transmittance bytes and depth pairs of every order and sign (equal, swapped,
+    /// across zero, far apart, +infinity behind, NaN), which covers every weight the f32
+    /// estimate and its correction produce.
+    #[test]
+    fn centroid4_is_the_scalar_centroid_for_every_pair() {
+        let depths: [(f32, f32); 8] = [
+            (1.0, 2.0),
+            (-3.0, 1.0e30),
+            (0.25, 0.25),
+            (5.0, 4.0),
+            (-0.0, 0.0),
+            (1.0e-30, f32::INFINITY),
+            (-2.0e9, -1.0e-9),
+            (f32::NAN, 1.0),
+        ];
+        for tf in 0..256u32 {
+            for tb in (0..256u32).step_by(4) {
+                for (zf, zb) in depths {
+                    let fr: [Row; 4] = core::array::from_fn(|i| Row::new([3, 2, 1], tf as u8, zf + i as f32));
+                    let bk: [Row; 4] = core::array::from_fn(|i| Row::new([9, 8, 7], (tb + i as u32) as u8, zb));
+                    let got = unpack(centroid4(pack(fr.map(Row::to_le_u64)), pack(bk.map(Row::to_le_u64))));
+                    for i in 0..4 {
+                        let want = crate::arith::centroid_depth(fr[i], bk[i]);
+                        assert_eq!((got[i] >> 32) as u32, want, "T {tf} {}, z {zf} {zb}", tb + i as u32);
                     }
                 }
             }

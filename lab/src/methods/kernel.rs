@@ -37,11 +37,13 @@ impl Arith {
     /// without an arithmetic run.
     pub const DEFAULT: Arith = Arith::Unbiased;
 
-    /// A validated fragment quantized to a row as this arithmetic quantizes it.
-    pub fn quantize(self, fragment: &Fragment) -> Row {
+    /// A validated fragment quantized to a row as this arithmetic quantizes it in the pixel
+    /// of id `pixel` (`y * width + x`, as a framebuffer's `pixel_id`).
+    pub fn quantize(self, fragment: &Fragment, pixel: u32) -> Row {
+        let h = fragment.hash(pixel);
         match self {
-            Arith::Paper => Paper::quantize(fragment),
-            Arith::Unbiased => Unbiased::quantize(fragment),
+            Arith::Paper => Paper::quantize(fragment, h),
+            Arith::Unbiased => Unbiased::quantize(fragment, h),
         }
     }
 }
