@@ -30,9 +30,12 @@ pub struct Frag {
 }
 
 impl Frag {
-    /// The kernel's validated fragment (same rules as [`mlab::Fragment::premultiplied`]).
+    /// The kernel's validated fragment (same rules as [`mlab::Fragment::premultiplied`]),
+    /// keyed by its primitive's id ([`Fragment::with_key`]): the kernel seeds its dithers with
+    /// the id and the pixel, so a fragment rounds the same way in every frame of a camera
+    /// path and in every submission order.
     pub fn to_kernel(&self) -> Result<Fragment, FragmentError> {
-        Fragment::premultiplied(self.color.into(), self.alpha, self.depth)
+        Fragment::premultiplied(self.color.into(), self.alpha, self.depth).map(|f| f.with_key(self.prim))
     }
 }
 
