@@ -131,9 +131,21 @@ impl Gpu {
     }
 }
 
-/// Fragments per pixel per dispatch (`COMPOSITE_CHUNK` in `composite.wgsl`: lavapipe ends an
-/// invocation's loops after 65,535 iterations in all).
-const CHUNK: u32 = 32768;
+/// Loop iterations one invocation may run in all on lavapipe (llvmpipe's gallivm loop limiter:
+/// one counter per shader function, every iteration of every loop, inner loops included unless
+/// the compiler unrolled them; past it the loops silently end).
+const LOOP_LIMIT: u32 = 65_535;
+
+/// Fragments per pixel per dispatch for `layers` (`chunk` in `composite.wgsl`): as many as keep
+/// the loops of one `composite` invocation within [`LOOP_LIMIT`] even when no loop is unrolled.
+/// With `R` slots (`M`, or `K + 1`), an invocation loads and stores its slots (at most `2 R`
+/// iterations) and runs, per fragment, one iteration of the fragment loop and at most `R` of the
+/// insert's (Listing 1: `M - 1`, Listing 2: `K`; the merges and tail adds have no loop).
+/// `R = 1`: 32,766; `R = 9` (HT 8): 6,551.
+pub(crate) const fn chunk(layers: Layers) -> u32 {
+    let r = slots(layers) as u32;
+    (LOOP_LIMIT - 2 * r) / (r + 1)
+}
 /// Invocations per workgroup (`@workgroup_size(64)` in `composite.wgsl`).
 const WORKGROUP: u32 = 64;
 /// The most bytes one storage binding may hold: WebGPU's default
@@ -199,7 +211,7 @@ struct Params {
     width: u32,
     line: u32,
     sorted: u32,
-    pad: u32,
+    chunk: u32,
     background: [u32; 4],
 }
 
@@ -743,17 +755,18 @@ impl Compositor {
         } = band;
         let device = &self.device;
         let (gx, gy, pitch) = self.grid(pixels);
-        // Dispatches: one per CHUNK fragments of the most crowded pixel.
-        let passes = sorted.most.div_ceil(CHUNK).max(1);
+        // Dispatches: one per `chunk` fragments of the most crowded pixel.
+        let chunk = chunk(self.layers);
+        let passes = sorted.most.div_ceil(chunk).max(1);
         let params = |pass: u32| Params {
             pixels,
             pitch,
             spans: u32::from(self.layout == Layout::Spans),
-            first: pass * CHUNK,
+            first: pass * chunk,
             width,
             line,
             sorted: u32::from(sorted.keys.is_none()),
-            pad: 0,
+            chunk,
             background: background.unwrap_or([0; 4]),
         };
         // RGBA8 pixels of the band: its lines times the width (at least one word: no empty

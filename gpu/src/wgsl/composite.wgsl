@@ -19,8 +19,8 @@ struct CompositeParams {
     pitch: u32,
     // 1: 8-pixel layer-major spans (mlab::Spans); 0: pixel-major (mlab::PixelMajor).
     spans: u32,
-    // This dispatch inserts fragments first .. first + COMPOSITE_CHUNK of each pixel; 0 starts
-    // from empty rows, later dispatches load the rows the previous one stored.
+    // This dispatch inserts fragments first .. first + chunk of each pixel; 0 starts from empty
+    // rows, later dispatches load the rows the previous one stored.
     first: u32,
     // Image width, and stored pixels per line (the width, or 8 * ceil(width / 8) for spans).
     width: u32,
@@ -28,18 +28,18 @@ struct CompositeParams {
     // 1: the fragments are already in pixel order (mlab_gpu::Sort::Cpu), binding 5 is not read;
     // 0: fragment i in pixel order is fragments[order[i].y] (mlab_gpu::Sort::Gpu).
     sorted: u32,
-    pad: u32,
+    // Fragments per pixel per dispatch, by the method's size (mlab_gpu's `chunk`). Mesa's
+    // llvmpipe (lavapipe) ends an invocation's loops after 65,535 iterations in all (gallivm's
+    // loop limiter, one counter per shader function, inner loops counted unless the compiler
+    // unrolled them, a guard against endless shaders): a pixel with more would silently lose the
+    // rest. The chunk keeps every loop of an invocation within the limit even with no loop
+    // unrolled; a pixel with more fragments is continued by further dispatches (`first`), which
+    // load its rows back. This also bounds the run time of one invocation (GPU watchdogs).
+    chunk: u32,
     // The background for `resolve`: three channels as mlab_gpu::background_q15 gives them, and
     // w = 1 (opaque) or 0 (Background::Transparent).
     background: vec4<u32>,
 }
-
-// Fragments per pixel per dispatch. Mesa's llvmpipe (lavapipe) ends an invocation's loops after
-// 65,535 iterations in all (gallivm's loop limiter, one counter per shader function, a guard
-// against endless shaders): a pixel with more fragments would silently lose the rest. A pixel
-// with more than COMPOSITE_CHUNK fragments is continued by further dispatches (`first`), which
-// load its rows back; this also bounds the run time of one invocation (GPU watchdogs).
-const COMPOSITE_CHUNK: u32 = 32768u;
 
 @group(0) @binding(0) var<uniform> composite_params: CompositeParams;
 @group(0) @binding(1) var<storage, read> composite_offsets: array<u32>;
@@ -57,7 +57,7 @@ fn composite_range(p: u32) -> vec2<u32> {
         return vec2<u32>(1u, 0u);
     }
     let start = composite_offsets[p] + composite_params.first;
-    let end = min(composite_offsets[p + 1u], start + COMPOSITE_CHUNK);
+    let end = min(composite_offsets[p + 1u], start + composite_params.chunk);
     if (composite_params.first != 0u && start >= end) {
         return vec2<u32>(1u, 0u);
     }
