@@ -1,17 +1,23 @@
 //! The two arithmetics of the kernel: the paper's round-to-nearest ([`Paper`]) and the
-//! default, unbiased one ([`Unbiased`]).
+//! default, unbiased one ([`Unbiased`]), and the fragment hash that seeds its dithers.
 //!
 //! Every kernel type takes the arithmetic as a type parameter that defaults to
 //! [`Unbiased`]: `BlendingArray<4>` is `BlendingArray<4, Unbiased>`, and
 //! `BlendingArray<4, Paper>` is the paper's arithmetic bit for bit. The arithmetic decides
-//! three things, nothing else (the row layout, Listing 1's sort, Listing 2's head and the
+//! four things, nothing else (the row layout, Listing 1's sort, Listing 2's head and the
 //! resolve are the same):
 //!
 //! | | [`Paper`] | [`Unbiased`] (default) |
 //! |---|---|---|
-//! | merge products (Eq. 7-8) | `round(a * b / 255)` | `floor((a * b + d) / 255)`, `d` = the merge dither in `0..=254` (`docs/layout.md`) |
-//! | fragment quantization | `floor(v * 255 + 0.5)` | the same, except faint fragments (`alpha * 255 < 16`): `floor(v * 255 + u)`, `u` = the fragment dither (`docs/layout.md`) |
+//! | merge products (Eq. 7-8) | `round(a * b / 255)` | `floor((a * b + d) / 255)`, `d = ((h & 0xffff) * 255) >> 16` in `0..=254` |
+//! | merged depth | `z_front` | the opacity-weighted depth of the two rows when `T_front >= 160` (`docs/layout.md`), else `z_front` |
+//! | fragment quantization | `floor(v * 255 + 0.5)` | the same, except faint fragments (`alpha * 255 < 16`): `floor(v * 255 + u)`, `u = ((h >> 24) + 0.5) / 256` |
 //! | HT tail | [`PaperTail`]: colors 3 x 10 bit, alpha 16, count 16 | [`Tail`]: colors 3 x 13 bit, alpha 14, count 11 |
+//!
+//! `h` is the inserted fragment's hash in its pixel, [`fragment_hash`]`(key, pixel)`: with a
+//! stable key ([`Fragment::with_key`], the primitive's id) a fragment is rounded the same way
+//! in every frame, so an image holds still while the camera moves; without one the key is the
+//! fragment's content, which changes with its depth (`docs/layout.md`, `docs/quality.md`).
 //!
 //! # Why
 //!
@@ -22,9 +28,9 @@
 //! fragments keeps half of the background visible. [`Unbiased`] rounds down or up with
 //! probability equal to the fraction: for a dither `d` uniform on `0..=254`,
 //! `E[floor((p + d) / 255)] = p / 255` exactly, so the stored transmittance is an unbiased
-//! estimate of the exact product and does not stall. The dither is a hash of the two rows'
-//! bits (no state, no randomness source): the same rows give the same bytes on every
-//! machine, every SIMD backend and in a shader with 32-bit integers.
+//! estimate of the exact product and does not stall. The dither is a hash (no state, no
+//! randomness source): the same fragments give the same bytes on every machine, every SIMD
+//! backend and in a shader with 32-bit integers.
 //!
 //! Exactness is kept where the paper is exact (tested): merging with the empty row is the
 //! identity (`floor((255 * t + d) / 255) = t` for `d <= 254`), an opaque row stays opaque,
@@ -32,10 +38,10 @@
 //! exactly as quantized. The colors use the complementary dither `254 - d`, which keeps
 //! `color <= 255 - T` an invariant of the merge, as it is for the paper's rounding.
 //!
-//! What the dither cannot do: when the same two rows are merged again and again (the same
-//! fragment, same depth, same color, submitted many times into a pixel whose last row does
-//! not change), the hash is the same each time and the merge is a fixed point, as with the
-//! paper's rounding. Any change of depth or color between the fragments moves it.
+//! What the dither cannot do: when the same fragment (same key, same pixel) is submitted
+//! many times into a pixel whose last row does not change, the hash is the same each time
+//! and the merge is a fixed point, as with the paper's rounding. Fragments with distinct keys
+//! move it.
 //!
 //! [`PaperTail`]: crate::hybrid::PaperTail
 //! [`Tail`]: crate::hybrid::Tail
@@ -125,10 +131,11 @@ impl Arithmetic for Unbiased {
     const KIND: Kind = Kind::Unbiased;
     type Tail = Tail;
 
-    /// With the merge dither `d = ((h & 0xffff) * 255) >> 16` ([`merge_dither`]):
+    /// With the merge dither `d = ((h & 0xffff) * 255) >> 16`:
     /// `T = floor((T_front * T_back + d) / 255)`,
     /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255,
-    /// and `z` the opacity-weighted depth of the two rows ([`centroid_depth`]).
+    /// and `z` the opacity-weighted depth of the two rows (`docs/layout.md`: `z_front` where
+    /// `T_front < 160` or the back row adds no opacity).
     #[inline(always)]
     fn merge(front: Row, back: Row, h: u32) -> Row {
         let merged = unbiased_merge(front, back, merge_dither(h));
@@ -138,8 +145,7 @@ impl Arithmetic for Unbiased {
 
     /// To nearest, as the paper's ([`Paper::quantize`](Arithmetic::quantize)), except for faint fragments
     /// (`alpha * 255 < 16`, where half a unit of rounding is more than 3 % of the value),
-    /// which are quantized with the fragment dither `u = ((h >> 24) + 0.5) / 256`
-    /// ([`fragment_dither`]).
+    /// which are quantized with the fragment dither `u = ((h >> 24) + 0.5) / 256`.
     ///
     /// Why only those (measured with `oit-lab faint`, 3 seeds, `docs/quality.md`): dithering
     /// every fragment doubles the quantization noise, which cost up to 1.1 dB on scenes that

@@ -19,7 +19,10 @@ use mlab::lanes::{self, HybridSpan, LANES};
 type MlabSpan<const M: usize> = [[Row; LANES]; M];
 
 use mlab_reference::lanes::{check_fragment_lanes, check_hybrid_span, check_mlab_span};
-use mlab_reference::model::{Model, RefMlab, composite_rows_f64, ref_bubble, ref_hybrid, ref_tail_fields, tail_f64};
+use mlab_reference::model::{
+    Model, RefMlab, composite_rows_f64, ref_bubble, ref_fragment_hash, ref_hybrid, ref_key, ref_row_hash,
+    ref_tail_fields, tail_f64,
+};
 use mlab_reference::oracle::{multilinear_bound, oracle, visibility_bound};
 
 use crate::check::{check_close, check_invariants, check_resolved, distinct_depths, invariants_hold, validate};
@@ -118,15 +121,17 @@ fn mlab_stream_m<const M: usize, A: Model>(input: &mut Input) {
             raws.clear();
         }
         let Some(f) = validate(&raw) else { continue };
-        // The reference row (equal to the kernel's quantization in `A`: checked by `validate`).
-        let row = A::ref_row(&f);
+        // The reference row (equal to the kernel's quantization in `A`: checked by `validate`)
+        // and hash, of pixel 0 (`BlendingArray::insert`).
+        let row = A::ref_row(&f, 0);
+        let h = ref_fragment_hash(ref_key(&f), 0);
         array.insert(&f);
         let mask = lane_mask(accepted.len());
         let rows8 = lane_rows(row, mask);
-        lanes::mlab_insert_with::<A, _>(&mut span, &rows8, mask);
+        lanes::mlab_insert_hashed::<A, _>(&mut span, &rows8, &[h; LANES], mask);
         for (lane, a) in lane_arrays.iter_mut().enumerate() {
             if mask >> lane & 1 == 1 {
-                mlab_mod::insert_with::<A, _>(a, rows8[lane]);
+                mlab_mod::insert_hashed::<A, _>(a, rows8[lane], h);
             }
         }
         assert_eq!(
@@ -136,7 +141,7 @@ fn mlab_stream_m<const M: usize, A: Model>(input: &mut Input) {
         );
         assert_eq!(&lane_arrays[0], array.rows());
         lanes_ok(check_mlab_span(&span, &lane_arrays));
-        reference.insert(row);
+        reference.insert(row, h);
         accepted.push(parts(&f));
         quant.push(A::quant_error(f.alpha()));
         visibility *= 1.0 - f64::from(f.alpha());
@@ -250,7 +255,7 @@ fn hybrid_stream_k<const K: usize, A: Model>(input: &mut Input) {
             break;
         }
         let Some(f) = validate(&raw) else { continue };
-        let row = A::ref_row(&f);
+        let row = A::ref_row(&f, 0);
         ht.insert(&f);
         let mask = lane_mask(frags.len());
         let rows8 = lane_rows(row, mask);
@@ -467,20 +472,24 @@ fn tail_fields<T: TailFormat>(t: T) -> [u64; 5] {
 /// merges (the default `mlab::merge` to the unbiased one), each product within
 /// `A::MERGE_ERROR` steps of the exact one (T always, colors unless they saturate at 255),
 /// and `color <= 255 - T` kept when both rows have it (documented for both arithmetics).
+///
+/// The hash of the merge (the inserted fragment's) is taken from the rows' bits, so that
+/// the input reaches every dither.
 pub fn check_merges(front: Row, back: Row) {
+    let h = front.words()[1].rotate_left(16) ^ back.words()[0];
     assert_eq!(
-        <mlab::Unbiased as mlab::Arithmetic>::merge(front, back),
-        <Unbiased as Model>::ref_merge(front, back),
+        <mlab::Unbiased as mlab::Arithmetic>::merge(front, back, h),
+        <Unbiased as Model>::ref_merge(front, back, h),
         "default merge of {front:?}, {back:?}"
     );
-    check_merge::<Paper>(front, back);
-    check_merge::<Unbiased>(front, back);
+    check_merge::<Paper>(front, back, h);
+    check_merge::<Unbiased>(front, back, h);
 }
 
-fn check_merge<A: Model>(front: Row, back: Row) {
+fn check_merge<A: Model>(front: Row, back: Row, h: u32) {
     let name = A::NAME;
-    let m = <A as mlab::Arithmetic>::merge(front, back);
-    assert_eq!(m, A::ref_merge(front, back), "{name} merge of {front:?}, {back:?}");
+    let m = <A as mlab::Arithmetic>::merge(front, back, h);
+    assert_eq!(m, A::ref_merge(front, back, h), "{name} merge of {front:?}, {back:?}");
     let [fr, fg, fb, ft, ..] = front.to_bytes().map(f64::from);
     let [br, bg, bb, bt, ..] = back.to_bytes().map(f64::from);
     let [mr, mg, mb, mt, ..] = m.to_bytes().map(f64::from);
@@ -496,7 +505,18 @@ fn check_merge<A: Model>(front: Row, back: Row) {
             "{name} merge color of {front:?}, {back:?}: {m:?}"
         );
     }
-    assert_eq!(m.depth().to_bits(), front.depth().to_bits());
+    // The merged depth: the front's (Paper; Unbiased where the back is not behind), else
+    // between the two (the opacity-weighted depth, checked bit for bit by `ref_merge`).
+    let (zf, zb, z) = (front.depth(), back.depth(), m.depth());
+    if A::NAME == "paper" || zb <= zf {
+        assert_eq!(
+            z.to_bits(),
+            zf.to_bits(),
+            "{name} merge depth of {front:?}, {back:?}: {m:?}"
+        );
+    } else if zf < zb {
+        assert!(zf <= z && z <= zb, "{name} merge depth of {front:?}, {back:?}: {m:?}");
+    }
     let occludes = |r: Row| r.color().iter().all(|&c| c <= 255 - r.transmittance());
     if occludes(front) && occludes(back) {
         assert!(
@@ -562,7 +582,7 @@ fn garbage_mlab<const M: usize, A: Model>(input: &mut Input) {
     let rows: [Row; M] = core::array::from_fn(|_| row_or(input, Row::EMPTY));
     let new = row_or(input, Row::EMPTY);
     let context = (name, &rows, new);
-    check_merge::<A>(rows[0], new);
+    check_merge::<A>(rows[0], new, ref_row_hash(new, 0));
 
     // Resolve of any rows: finite, in range, and Eq. 5 evaluated in f64.
     let r = resolve_rows(&rows);
@@ -575,7 +595,7 @@ fn garbage_mlab<const M: usize, A: Model>(input: &mut Input) {
     // Insert of any row into any rows: Listing 1 step by step, never a panic.
     let (mut expected, pushed) = ref_bubble(&rows, new);
     let last = expected[M - 1];
-    expected[M - 1] = A::ref_merge(last, pushed);
+    expected[M - 1] = A::ref_merge(last, pushed, ref_row_hash(new, 0));
     let mut after = rows;
     mlab_mod::insert_with::<A, _>(&mut after, new);
     assert_eq!(
@@ -773,12 +793,12 @@ pub trait Layout {
     const SLOTS: usize = <Self::P as Pixel>::ROWS;
     /// The arithmetic's name, for messages.
     const NAME: &'static str;
-    /// The reference row of a valid fragment in the layout's arithmetic.
-    fn ref_row(f: &Fragment) -> Row;
+    /// The reference row of a valid fragment in the layout's arithmetic, in pixel `pixel`.
+    fn ref_row(f: &Fragment, pixel: u32) -> Row;
     /// Largest resolved color.
     fn max_color() -> f32;
-    /// The reference insert on one pixel's slots (any contents).
-    fn ref_insert(slots: &mut [Row], row: Row);
+    /// The reference insert on one pixel's slots (any contents) of a row of hash `h`.
+    fn ref_insert(slots: &mut [Row], row: Row, h: u32);
     /// The resolve of one pixel's slots, split here.
     fn ref_resolve(slots: &[Row]) -> Resolved;
     /// What `Framebuffer::resolve_rgba8` writes for one pixel's slots: the reference integer
@@ -791,7 +811,17 @@ pub trait Layout {
     /// The span `x0 .. x0 + 8` of line `y` through the lanes kernel: gather the pixels into
     /// a lanes span (lanes outside the buffer hold a sentinel), insert `row` in the lanes of
     /// `mask` that are inside, check that every other lane is unchanged, scatter back.
-    fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8);
+    #[allow(clippy::too_many_arguments)]
+    fn lanes_span(
+        storage: &mut [Row],
+        w: u32,
+        h: u32,
+        x0: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    );
 }
 
 /// The pixel-major framebuffer of a layout.
@@ -846,8 +876,8 @@ pub struct HybridLayout<const K: usize, A>(core::marker::PhantomData<A>);
 impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
     type P = Mlab<M, A>;
     const NAME: &'static str = A::NAME;
-    fn ref_row(f: &Fragment) -> Row {
-        A::ref_row(f)
+    fn ref_row(f: &Fragment, pixel: u32) -> Row {
+        A::ref_row(f, pixel)
     }
     fn max_color() -> f32 {
         M as f32
@@ -855,10 +885,10 @@ impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
     fn slots(value: [Row; M]) -> Vec<Row> {
         value.to_vec()
     }
-    fn ref_insert(slots: &mut [Row], row: Row) {
+    fn ref_insert(slots: &mut [Row], row: Row, h: u32) {
         let (mut rows, pushed) = ref_bubble(slots, row);
         let last = rows[M - 1];
-        rows[M - 1] = A::ref_merge(last, pushed);
+        rows[M - 1] = A::ref_merge(last, pushed, h);
         slots.copy_from_slice(&rows);
     }
     fn ref_resolve(slots: &[Row]) -> Resolved {
@@ -870,7 +900,16 @@ impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
     fn cleared(slots: &mut [Row]) {
         slots.fill(Row::EMPTY);
     }
-    fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8) {
+    fn lanes_span(
+        storage: &mut [Row],
+        w: u32,
+        h: u32,
+        x0: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    ) {
         let on = mask & inside(w, h, x0, y);
         let base = |lane: usize| (y as usize * w as usize + x0 as usize + lane) * M;
         let mut span: MlabSpan<M> = core::array::from_fn(|j| core::array::from_fn(|lane| sentinel(lane, j)));
@@ -880,7 +919,8 @@ impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
             }
         }
         let before = span;
-        lanes::mlab_insert_with::<A, _>(&mut span, &lane_rows(row, on), on);
+        let rows: [Row; LANES] = core::array::from_fn(|l| if on >> l & 1 == 1 { rows[l] } else { OFF_LANE_ROW });
+        lanes::mlab_insert_hashed::<A, _>(&mut span, &rows, hashes, on);
         for lane in (0..LANES).filter(|&l| on >> l & 1 == 0) {
             for j in 0..M {
                 assert_eq!(
@@ -900,8 +940,8 @@ impl<const M: usize, A: Model> Layout for MlabLayout<M, A> {
 impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
     type P = Ht<K, A>;
     const NAME: &'static str = A::NAME;
-    fn ref_row(f: &Fragment) -> Row {
-        A::ref_row(f)
+    fn ref_row(f: &Fragment, pixel: u32) -> Row {
+        A::ref_row(f, pixel)
     }
     fn max_color() -> f32 {
         K as f32 + tail_color_limit::<A>()
@@ -911,7 +951,7 @@ impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
         v.push(Row::from_bytes(tail.to_bytes()));
         v
     }
-    fn ref_insert(slots: &mut [Row], row: Row) {
+    fn ref_insert(slots: &mut [Row], row: Row, _: u32) {
         let tail = slots[K].to_bytes();
         let (head, pushed) = ref_bubble(&slots[..K], row);
         slots[..K].copy_from_slice(&head);
@@ -933,7 +973,16 @@ impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
         slots[..K].fill(Row::EMPTY);
         slots[K] = Row::from_bytes([0; 8]);
     }
-    fn lanes_span(storage: &mut [Row], w: u32, h: u32, x0: u32, y: u32, row: Row, mask: u8) {
+    fn lanes_span(
+        storage: &mut [Row],
+        w: u32,
+        h: u32,
+        x0: u32,
+        y: u32,
+        rows: &[Row; LANES],
+        _: &[u32; LANES],
+        mask: u8,
+    ) {
         let on = mask & inside(w, h, x0, y);
         let base = |lane: usize| (y as usize * w as usize + x0 as usize + lane) * (K + 1);
         let mut span = HybridSpan::<K, A> {
@@ -947,7 +996,8 @@ impl<const K: usize, A: Model> Layout for HybridLayout<K, A> {
             span.tails[lane] = <A::Tail as TailFormat>::from_bytes(storage[base(lane) + K].to_bytes());
         }
         let before = span;
-        lanes::hybrid_insert(&mut span, &lane_rows(row, on), on);
+        let rows: [Row; LANES] = core::array::from_fn(|l| if on >> l & 1 == 1 { rows[l] } else { OFF_LANE_ROW });
+        lanes::hybrid_insert(&mut span, &rows, on);
         for lane in (0..LANES).filter(|&l| on >> l & 1 == 0) {
             for j in 0..K {
                 assert_eq!(
@@ -1104,6 +1154,10 @@ fn spans<L: Layout>(input: &mut Input) {
                 let (x0, y, n) = (u32::from(x0) % (w + 4), u32::from(y) % (h + 2), u32::from(n % 9));
                 // The lanes kernel on a copy: lanes 0 .. n of the mask, at the same place.
                 let span_mask = (mask as u16 & ((1u16 << n) - 1)) as u8;
+                // Each lane's pixel id, reference hash and row (`Framebuffer::pixel_id`).
+                let pid = |lane: u32| y.wrapping_mul(w).wrapping_add(x0).wrapping_add(lane);
+                let hashes: [u32; LANES] = core::array::from_fn(|l| ref_fragment_hash(ref_key(&f), pid(l as u32)));
+                let all: [Row; LANES] = core::array::from_fn(|l| L::ref_row(&f, pid(l as u32)));
                 let mut lanes_buf = before.clone();
                 L::lanes_span(
                     &mut lanes_buf[GUARD..GUARD + len],
@@ -1111,13 +1165,15 @@ fn spans<L: Layout>(input: &mut Input) {
                     h,
                     x0,
                     y,
-                    L::ref_row(&f),
+                    &all,
+                    &hashes,
                     span_mask,
                 );
                 lanes_result = Some(lanes_buf);
                 // The span framebuffer: refused (and unchanged) if an on lane is outside, then
                 // the same span with those lanes off.
-                let rows8 = lane_rows(L::ref_row(&f), span_mask);
+                let rows8: [Row; LANES] =
+                    core::array::from_fn(|l| if span_mask >> l & 1 == 1 { all[l] } else { OFF_LANE_ROW });
                 let top = (0..LANES as u32).filter(|&l| span_mask >> l & 1 == 1).max();
                 let expected_err = if y >= h {
                     Some(FramebufferError::OutOfBounds {
@@ -1135,14 +1191,17 @@ fn spans<L: Layout>(input: &mut Input) {
                     })
                 };
                 let sbefore = sbuf.clone();
-                let got = span_view::<L>(&mut sbuf, w, h).insert_span(x0, y, &rows8, span_mask);
+                let got = span_view::<L>(&mut sbuf, w, h).insert_span_hashed(x0, y, &rows8, &hashes, span_mask);
                 match expected_err {
                     Some(e) => {
                         assert_eq!(got, Err(e), "span ({x0}, {y}) mask {span_mask:#010b} in {w}x{h}");
                         assert_eq!(sbuf, sbefore, "a refused span changed the span framebuffer");
                         let on = span_mask & inside(w, h, x0, y);
                         if on != 0 {
-                            assert_eq!(span_view::<L>(&mut sbuf, w, h).insert_span(x0, y, &rows8, on), Ok(()));
+                            assert_eq!(
+                                span_view::<L>(&mut sbuf, w, h).insert_span_hashed(x0, y, &rows8, &hashes, on),
+                                Ok(())
+                            );
                         }
                     }
                     None => assert_eq!(got, Ok(())),
@@ -1156,7 +1215,11 @@ fn spans<L: Layout>(input: &mut Input) {
                     if x < w && y < h {
                         assert_eq!(got, Ok(()));
                         let p = pixel(x, y);
-                        L::ref_insert(&mut expected[p..p + L::SLOTS], L::ref_row(&f));
+                        L::ref_insert(
+                            &mut expected[p..p + L::SLOTS],
+                            all[lane as usize],
+                            hashes[lane as usize],
+                        );
                     } else {
                         assert_eq!(
                             got,

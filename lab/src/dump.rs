@@ -14,6 +14,10 @@
 //! nearer, finite), premultiplied color 3 x f32 (each in `[0, 1]`), alpha f32 (`[0, 1]`).
 //! The file ends right after the last fragment. Every value is checked on reading: a bad
 //! file gives a [`DumpError`] naming what and where, never a panic.
+//!
+//! The format has no primitive ids: writing drops [`Frag::prim`], and reading gives each
+//! fragment its index in the file as its primitive id (unique in the frame, as the kernel's
+//! fragment key must be; a dump is one frame, with no camera path to hold still along).
 
 use crate::scenes::Scene;
 use crate::stream::{Frag, Stream};
@@ -167,6 +171,8 @@ pub fn from_bytes(b: &[u8]) -> Result<Stream, DumpError> {
             depth: f32_at(r, 8),
             color: [f32_at(r, 12), f32_at(r, 16), f32_at(r, 20)],
             alpha: f32_at(r, 24),
+            // No primitive ids in the format: each fragment is its own primitive.
+            prim: i as u32,
         };
         f.to_kernel().map_err(|error| DumpError::BadFragment { index, error })?;
         frags.push(f);

@@ -8,7 +8,8 @@
 use mlab::{Fragment, FragmentError};
 
 /// One transparent fragment: pixel index `y * width + x`, depth (distance from the
-/// viewer, smaller is nearer), premultiplied color and alpha (coverage).
+/// viewer, smaller is nearer), premultiplied color and alpha (coverage), and the id of the
+/// primitive that emitted it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frag {
     /// `y * width + x`.
@@ -19,12 +20,22 @@ pub struct Frag {
     pub color: [f32; 3],
     /// Alpha in `[0, 1]`; 0 with a color is pure additive light.
     pub alpha: f32,
+    /// The id of the primitive (strand segment, sprite, leaf, sphere band, panel face, fog
+    /// slice, splat) that emitted the fragment: unique per primitive within a frame, and the
+    /// same for the same primitive in every frame of a camera path and in every submission
+    /// order (the scenes number their primitives in the order they build them, a list that
+    /// depends on neither the camera nor the frame size; [`crate::scenes::Primitive::id`]).
+    /// What the kernel's stable fragment key is made of (issue 30).
+    pub prim: u32,
 }
 
 impl Frag {
-    /// The kernel's validated fragment (same rules as [`mlab::Fragment::premultiplied`]).
+    /// The kernel's validated fragment (same rules as [`mlab::Fragment::premultiplied`]),
+    /// keyed by its primitive's id ([`Fragment::with_key`]): the kernel seeds its dithers with
+    /// the id and the pixel, so a fragment rounds the same way in every frame of a camera
+    /// path and in every submission order.
     pub fn to_kernel(&self) -> Result<Fragment, FragmentError> {
-        Fragment::premultiplied(self.color.into(), self.alpha, self.depth)
+        Fragment::premultiplied(self.color.into(), self.alpha, self.depth).map(|f| f.with_key(self.prim))
     }
 }
 
@@ -47,8 +58,8 @@ impl Stream {
         self.width as usize * self.height as usize
     }
 
-    /// FNV-1a (64 bit) over the size, background and every fragment's bytes, little
-    /// endian: pins a scene's stream in tests.
+    /// FNV-1a (64 bit) over the size, background and every fragment's bytes (pixel, depth,
+    /// color, alpha, primitive id), little endian: pins a scene's stream in tests.
     pub fn hash(&self) -> u64 {
         let mut h: u64 = 0xcbf2_9ce4_8422_2325;
         let mut eat = |bytes: &[u8]| {
@@ -69,6 +80,7 @@ impl Stream {
                 eat(&c.to_bits().to_le_bytes());
             }
             eat(&f.alpha.to_bits().to_le_bytes());
+            eat(&f.prim.to_le_bytes());
         }
         h
     }

@@ -16,11 +16,14 @@ fn stream(w: u32, h: u32, frags: &[(u32, f32, [f32; 3], f32)]) -> Stream {
         background: [1.0; 3],
         frags: frags
             .iter()
-            .map(|&(pixel, depth, color, alpha)| Frag {
+            .enumerate()
+            .map(|(i, &(pixel, depth, color, alpha))| Frag {
                 pixel,
                 depth,
                 color,
                 alpha,
+                // Each fragment its own primitive.
+                prim: i as u32,
             })
             .collect(),
     }

@@ -56,6 +56,7 @@ fn ties_and_signed_zeros() {
             depth,
             color: [0.1 * i as f32 * alpha; 3],
             alpha,
+            prim: i as u32,
         })
         .collect();
     let s = Stream {

@@ -1,5 +1,6 @@
 //! MLAB and HT through the kernel's pixel-major framebuffers, fragment by fragment in
-//! submission order, and the lab's [`Arith`] (which the `*_with` functions, here and in
+//! submission order, each keyed by its primitive's id ([`crate::stream::Frag::to_kernel`]:
+//! the dithers hold still under camera motion), and the lab's [`Arith`] (which the `*_with` functions, here and in
 //! [`super::lanes`], turn into the kernel's arithmetic type).
 
 use super::{BinnedStream, HT_SIZES, Image, MLAB_SIZES};

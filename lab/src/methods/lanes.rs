@@ -10,9 +10,10 @@ use mlab::{Arithmetic, Framebuffer, HybridSpanFramebuffer, Paper, Row, SpanBatch
 /// A kernel through its 8-pixel lanes: the stream goes, fragment by fragment in submission
 /// order, through the kernel's span batcher ([`SpanBatcher`]) into the span framebuffer `fb`
 /// (cleared): the batcher gathers the fragments into 8-pixel span inserts, quantized 8 at a
-/// time in `fb`'s arithmetic, and keeps each pixel's submission order exactly. Pixels are
-/// independent in MLAB and HT, so the image is the scalar kernel's bit for bit. Resolved a
-/// span at a time.
+/// time in `fb`'s arithmetic with each fragment's key (its primitive's id,
+/// [`crate::stream::Frag::to_kernel`]), and keeps each pixel's submission order exactly.
+/// Pixels are independent in MLAB and HT, so the image is the scalar kernel's bit for bit.
+/// Resolved a span at a time.
 fn run_spans<F: Framebuffer>(binned: &BinnedStream, fb: &mut F) -> Result<Image, String> {
     let s = binned.stream;
     let mut batch = SpanBatcher::new(fb);

@@ -25,13 +25,17 @@ impl Builder {
     }
 
     /// Add a primitive covering the box `[x0, x1] x [y0, y1]` (in pixels): the pixels whose
-    /// centres a scan of that box visits, clamped to the frame.
+    /// centres a scan of that box visits, clamped to the frame. Its id is its number in the
+    /// list: every scene builds the same list of primitives whatever the frame size (the
+    /// boxes are clamped, never dropped), so an id names the same primitive at every size.
     fn push(&mut self, (x0, y0, x1, y1): (f32, f32, f32, f32), kind: Kind) {
         let xa = (x0.floor().max(0.0)) as u32;
         let ya = (y0.floor().max(0.0)) as u32;
         let xb = (x1.ceil().min(self.w as f32).max(0.0)) as u32;
         let yb = (y1.ceil().min(self.h as f32).max(0.0)) as u32;
+        let id = u32::try_from(self.prims.len()).unwrap_or(u32::MAX);
         self.prims.push(Primitive {
+            id,
             x0: xa,
             y0: ya,
             x1: xb,
@@ -299,30 +303,55 @@ const PALETTE: [[f32; 3]; 8] = [
     [0.5, 0.9, 0.3],
 ];
 
+/// The frame height TEAPOTS' bands are laid out for, in lines ...
+const TEAPOTS_LAYOUT_LINES: f32 = 360.0;
+/// ... and a band's height there, in lines.
+const TEAPOTS_BAND_LINES: f32 = 7.0;
+
 /// TEAPOTS (a PWRPLANT stand-in): intersecting spheres, each rasterized as horizontal bands
 /// of front and back faces submitted in a shuffled order (like an unsorted mesh); alpha
 /// rises towards the silhouette (Fresnel-like).
+///
+/// The bands are laid out once, in units of the frame height like the rest of the scene, as
+/// for a frame of 360 lines: bands of 7 lines from the line above the sphere's box there, as
+/// many as cover it. So the list of bands, their shuffle, every later random draw and every
+/// primitive id depend on neither the frame size nor the camera, and at 360 lines the bands
+/// are exactly the whole-line bands the scene always had. At another size a band is
+/// rasterized to the lines whose centres fall between its bounds scaled to that size (none
+/// where it is thinner than a line); the first band starts, and the last one ends, at the
+/// sphere's pixel box at least, so a sphere's bands cover each of its lines exactly once.
 pub(super) fn teapots(r: &mut Builder, rng: &mut Rng) -> [f32; 3] {
     let (w, s) = (r.w as f32, r.s);
     let focal = s * 1.1;
     for _ in 0..22 {
         let cx = rng.range(0.05, 0.95) * w;
-        let cy = rng.range(0.1, 0.9) * s;
-        let rad = s * rng.range(0.1, 0.28);
+        let cyn = rng.range(0.1, 0.9);
+        let rn = rng.range(0.1, 0.28);
+        let (cy, rad) = (cyn * s, s * rn);
         let zc = rng.range(20.0, 40.0);
         let rw = rad * zc / focal;
         let col = PALETTE[rng.below(PALETTE.len())];
         let a0 = rng.range(0.2, 0.45);
-        // Bands of whole pixel rows, so that no pixel is scanned twice.
-        let band = (s * 0.02).max(2.0).floor();
+        // The layout frame's sphere box and bands (whole lines there).
+        let (cy_l, rad_l) = (cyn * TEAPOTS_LAYOUT_LINES, TEAPOTS_LAYOUT_LINES * rn);
+        let top_l = (cy_l - rad_l - 1.0).floor();
+        let bands = ((2.0 * rad_l + 2.0) / TEAPOTS_BAND_LINES).ceil() as usize + 1;
+        // Bound `b` of the bands at this size, as the first line whose centre is below it;
+        // the outer bounds reach the sphere's box at this size.
+        let scale = s / TEAPOTS_LAYOUT_LINES;
+        let bound = |b: usize| ((top_l + b as f32 * TEAPOTS_BAND_LINES) * scale - 0.5).ceil();
         let top = (cy - rad - 1.0).floor();
-        let bands = ((2.0 * rad + 2.0) / band).ceil() as usize + 1;
+        let bottom = bound(bands).max((cy + rad + 1.0).ceil());
+        let line = |b: usize| match b {
+            0 => top,
+            b if b >= bands => bottom,
+            b => bound(b).clamp(top, bottom),
+        };
         let mut order: Vec<(usize, bool)> = (0..bands).flat_map(|b| [(b, true), (b, false)]).collect();
         rng.shuffle(&mut order);
         for (b, front) in order {
-            let y0 = top + b as f32 * band;
             r.push(
-                (cx - rad - 1.0, y0, cx + rad + 1.0, y0 + band),
+                (cx - rad - 1.0, line(b), cx + rad + 1.0, line(b + 1)),
                 Kind::SphereBand(SphereBand {
                     cx,
                     cy,

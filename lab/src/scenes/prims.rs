@@ -57,7 +57,7 @@ impl Primitives {
         let mut frags = Vec::new();
         for p in &self.prims {
             p.raster(clip, &mut |x, y, mask, l| {
-                l.push_frags(self.width, x, y, mask, &mut frags)
+                l.push_frags(self.width, x, y, mask, p.id, &mut frags)
             });
         }
         Stream {
@@ -74,9 +74,16 @@ impl Primitives {
     }
 }
 
-/// One primitive: its pixel box (`x0..x1`, `y0..y1`, clamped to the frame) and its kind.
+/// One primitive: its id, its pixel box (`x0..x1`, `y0..y1`, clamped to the frame) and its
+/// kind.
 #[derive(Clone, Copy, Debug)]
 pub struct Primitive {
+    /// The primitive's id: its number in the scene's list as built (0, 1, 2, ...), which
+    /// depends on neither the camera nor the frame size, so the same primitive has the same
+    /// id in every frame of a camera path and in every submission order (a shuffle of the
+    /// list keeps each primitive's id). Every fragment it emits carries it
+    /// ([`crate::stream::Frag::prim`]).
+    pub id: u32,
     /// First column.
     pub x0: u32,
     /// First line.

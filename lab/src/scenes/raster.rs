@@ -1,7 +1,8 @@
 //! The span rasterizer: one scan per primitive kind (monomorphized over the kind's shade),
 //! over the primitive's box clipped to any rectangle, emitting 8-pixel spans aligned to
 //! multiples of 8 columns: a coverage mask and per-lane premultiplied color, alpha and depth,
-//! as [`mlab::lanes::FragmentLanes`] (what the kernel's span insert quantizes).
+//! and the primitive's id as every lane's stable key, as [`mlab::lanes::FragmentLanes`] (what
+//! the kernel's span insert quantizes).
 
 use super::clamp01;
 use super::lanes8::{F8, centres, clamp01_8, lt_bits, max0_8, min_sel, splat};
@@ -35,17 +36,19 @@ impl Clip {
 }
 
 /// The lanes of one emitted span (lanes outside the mask hold unspecified values, NaN
-/// included: read only the lanes in the mask, as the kernel's quantizer does).
+/// included: read only the lanes in the mask, as the kernel's quantizer does); `key` is the
+/// primitive's id in every lane ([`Primitive::id`]).
 pub type SpanLanes = FragmentLanes;
 
 /// Flattening spans back into fragments (the stream of the quality tables).
 pub trait PushFrags {
-    /// Append the lanes set in `mask` of the span at `(x, y)` as fragments, left to right.
-    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, out: &mut Vec<Frag>);
+    /// Append the lanes set in `mask` of the span at `(x, y)` as fragments of primitive
+    /// `prim`, left to right.
+    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, prim: u32, out: &mut Vec<Frag>);
 }
 
 impl PushFrags for FragmentLanes {
-    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, out: &mut Vec<Frag>) {
+    fn push_frags(&self, width: u32, x: u32, y: u32, mask: u8, prim: u32, out: &mut Vec<Frag>) {
         for i in 0..LANES {
             if mask & (1 << i) != 0 {
                 out.push(Frag {
@@ -53,6 +56,7 @@ impl PushFrags for FragmentLanes {
                     depth: self.depth[i],
                     color: [self.color[0][i], self.color[1][i], self.color[2][i]],
                     alpha: self.alpha[i],
+                    prim,
                 });
             }
         }
@@ -61,7 +65,8 @@ impl PushFrags for FragmentLanes {
 
 impl Primitive {
     /// Rasterize over the box clipped to `clip`: `emit(x, y, mask, lanes)` per span that has
-    /// a fragment, `x` a multiple of 8, lines top to bottom, spans left to right. A fragment
+    /// a fragment, `x` a multiple of 8, lines top to bottom, spans left to right; the lanes'
+    /// `key` is the primitive's id. A fragment
     /// that carries neither opacity nor light (both below 1/1024) is not emitted.
     ///
     /// Strands, sprites, fog slices and splats are shaded eight lanes at once (`shade8`,
@@ -96,6 +101,15 @@ impl Primitive {
         }
     }
 
+    /// The lanes a scan fills: every lane keyed by the primitive's id.
+    #[inline(always)]
+    fn lanes(&self) -> FragmentLanes {
+        FragmentLanes {
+            key: Some([self.id; LANES]),
+            ..FragmentLanes::TRANSPARENT
+        }
+    }
+
     /// The box clipped to `clip` (columns, lines), `None` if empty.
     #[inline(always)]
     fn clipped(&self, clip: Clip) -> Option<((u32, u32), (u32, u32))> {
@@ -125,7 +139,7 @@ impl Primitive {
         let Some((cols, (ya, yb))) = self.clipped(clip) else {
             return;
         };
-        let mut lanes = FragmentLanes::TRANSPARENT;
+        let mut lanes = self.lanes();
         for y in ya..yb {
             let py = y as f32 + 0.5;
             // The kind's conservative range on this line (pixel centres `x + 0.5`).
@@ -175,7 +189,7 @@ impl Primitive {
         let Some((cols, (ya, yb))) = self.clipped(clip) else {
             return;
         };
-        let mut lanes = FragmentLanes::TRANSPARENT;
+        let mut lanes = self.lanes();
         let eps = splat(1.0 / 1024.0);
         for y in ya..yb {
             let py = y as f32 + 0.5;

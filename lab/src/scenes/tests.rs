@@ -241,6 +241,7 @@ fn raster_is_the_scalar_raster_span_by_span() {
         let (x0, x1) = (rng.below(w as usize) as u32, rng.below(w as usize + 1) as u32);
         let (y0, y1) = (rng.below(h as usize) as u32, rng.below(h as usize + 1) as u32);
         let p = Primitive {
+            id: n,
             x0: x0.min(x1),
             y0: y0.min(y1),
             x1: x0.max(x1),
@@ -345,6 +346,7 @@ fn line_ranges_hold_every_covered_pixel() {
         };
         covered += check(
             &Primitive {
+                id: n,
                 x0: 0,
                 y0: 0,
                 x1: 40,
@@ -364,4 +366,112 @@ fn line_ranges_hold_every_covered_pixel() {
         }
     }
     assert!(covered > 1_000_000, "{covered}");
+}
+
+/// Every scene numbers its primitives 0, 1, 2, ... in submission order, and each fragment of
+/// its stream carries the number of the primitive that emitted it.
+#[test]
+fn fragments_carry_their_primitives_ids() {
+    for scene in Scene::ALL {
+        let (w, h) = (61, 35);
+        let prims = scene.primitives(w, h, 5);
+        assert!(
+            prims.prims.iter().enumerate().all(|(i, p)| p.id == i as u32),
+            "{}: ids are not the list's numbering",
+            scene.name()
+        );
+        let s = prims.stream();
+        assert!(s.frags.windows(2).all(|f| f[0].prim <= f[1].prim), "{}", scene.name());
+        let mut counts = vec![0usize; prims.prims.len()];
+        for f in &s.frags {
+            counts[f.prim as usize] += 1;
+        }
+        for p in &prims.prims {
+            let mut n = 0;
+            p.raster(Clip::frame(w, h), &mut |_, _, mask, _| n += mask.count_ones() as usize);
+            assert_eq!(counts[p.id as usize], n, "{}: primitive {}", scene.name(), p.id);
+        }
+    }
+}
+
+/// What a primitive is, apart from where the frame size puts it: the parameters its builder
+/// draws in units that do not scale with the frame (depths, colors, alphas, faces).
+fn size_free(k: &Kind) -> Vec<f32> {
+    let b = |v: bool| f32::from(u8::from(v));
+    match k {
+        Kind::Strand(s) => vec![0.0, s.alpha, s.tint],
+        Kind::Sprite(s) => vec![1.0, s.z, s.a0, b(s.fire), s.heat],
+        Kind::Trunk(t) => vec![2.0, t.z],
+        Kind::Leaf(l) => vec![3.0, l.lz, l.col[0], l.col[1], l.col[2]],
+        Kind::SphereBand(s) => vec![4.0, s.zc, s.a0, s.col[0], s.col[1], s.col[2], b(s.front)],
+        Kind::Panel(p) => vec![5.0, p.z, p.alpha, p.thick, b(p.front)],
+        Kind::FogSlice(f) => vec![6.0, f.z, f.peak],
+        Kind::Splat(s) => vec![7.0, s.z, s.opacity, s.color[0], s.color[1], s.color[2]],
+    }
+}
+
+/// The primitive list does not depend on the frame size: at every size the same primitives
+/// (the same kinds, depths, colors, alphas and faces) in the same order under the same ids,
+/// so an id names the same primitive in every frame of the camera path (which builds the
+/// scene for a frame a line taller per frame, `peers::camera_stream`). TEAPOTS' bands
+/// included: a sphere has as many bands at 36 lines as at 720.
+#[test]
+fn primitive_lists_do_not_depend_on_the_frame_size() {
+    for scene in Scene::ALL {
+        let a = scene.primitives(64, 36, 1);
+        for (w, h) in [(64, 37), (65, 37), (203, 117), (320, 180), (1280, 720)] {
+            let b = scene.primitives(w, h, 1);
+            assert_eq!(a.prims.len(), b.prims.len(), "{} at {w}x{h}", scene.name());
+            for (p, q) in a.prims.iter().zip(&b.prims) {
+                assert_eq!(p.id, q.id);
+                assert_eq!(
+                    size_free(&p.kind),
+                    size_free(&q.kind),
+                    "{} at {w}x{h}: primitive {}",
+                    scene.name(),
+                    p.id
+                );
+            }
+        }
+    }
+}
+
+/// A sphere's face: its centre's bits and whether it is the front.
+type Face = (u32, u32, bool);
+
+/// TEAPOTS' bands of a sphere's face cover each of its lines exactly once at every size: the
+/// fragments of all the bands of a face are those of one primitive over the face's whole box
+/// (the same pixels, bit for bit the same values), whatever the bands' heights there.
+#[test]
+fn teapots_bands_cover_each_line_once() {
+    for (w, h) in [(64, 36), (65, 37), (203, 117), (320, 180), (640, 360), (1000, 571)] {
+        let prims = Scene::Teapots.primitives(w, h, 2);
+        // Faces in order of first appearance: (cx, cy, front) -> bands.
+        let mut faces: Vec<(Face, Vec<&Primitive>)> = Vec::new();
+        for p in &prims.prims {
+            let Kind::SphereBand(s) = &p.kind else {
+                panic!("TEAPOTS has only sphere bands");
+            };
+            let key = (s.cx.to_bits(), s.cy.to_bits(), s.front);
+            match faces.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, v)) => v.push(p),
+                None => faces.push((key, vec![p])),
+            }
+        }
+        assert_eq!(faces.len(), 44, "{w}x{h}");
+        let clip = Clip::frame(w, h);
+        for (_, bands) in &faces {
+            let mut got = Vec::new();
+            for p in bands {
+                got.extend(spans(p, clip, true));
+            }
+            got.sort_by_key(|s| (s.1, s.0));
+            let whole = Primitive {
+                y0: bands.iter().map(|p| p.y0).min().unwrap_or(0),
+                y1: bands.iter().map(|p| p.y1).max().unwrap_or(0),
+                ..*bands[0]
+            };
+            assert_eq!(got, spans(&whole, clip, true), "{w}x{h}");
+        }
+    }
 }

@@ -212,6 +212,15 @@ fn grow<T: Clone>(v: &mut Vec<T>, n: usize, fill: T) {
     }
 }
 
+/// The id of frame pixel `(x, y)` in the hashes that seed the kernel's dithers
+/// ([`mlab::Fragment::hash`]): `y * width + x` of the whole frame, so that a tile's target (a
+/// framebuffer of the tile's size) quantizes and merges each fragment as the whole frame's
+/// framebuffer would: the spans are quantized at [`frame_pixel`] and inserted with their
+/// hashes ([`Framebuffer::insert_span_hashed`]).
+fn frame_pixel(scene: &Primitives, x: u32, y: u32) -> u32 {
+    y.wrapping_mul(scene.width).wrapping_add(x)
+}
+
 /// Per span, the fragments `popcount(mask)`.
 fn count(mask: u8) -> u64 {
     mask.count_ones() as u64
@@ -423,10 +432,10 @@ fn mlab_tile<A: Arithmetic>(
     let (mut n, mut invalid, mut err) = (0u64, 0u8, None);
     for &i in prims {
         scene.prims[i as usize].raster(clip, &mut |x, y, mask, l: &SpanLanes| {
-            let q = l.quantize_with::<A>(mask);
+            let q = l.quantize_at::<A>(mask, frame_pixel(scene, x, y));
             invalid |= q.invalid;
             n += count(mask);
-            if let Err(e) = fb.insert_span(x - clip.x0, y - clip.y0, &q.rows, q.valid) {
+            if let Err(e) = fb.insert_span_hashed(x - clip.x0, y - clip.y0, &q.rows, &q.hashes, q.valid) {
                 err.get_or_insert(e);
             }
         });
@@ -537,7 +546,7 @@ fn abuffer_tile(
     let mut invalid = 0u8;
     for &i in prims {
         scene.prims[i as usize].raster(clip, &mut |x, y, mask, l: &SpanLanes| {
-            let q = l.quantize_with::<Unbiased>(mask);
+            let q = l.quantize_at::<Unbiased>(mask, frame_pixel(scene, x, y));
             invalid |= q.invalid;
             let row = ((y - clip.y0) as usize * tw + (x - clip.x0) as usize) as u32;
             scratch.push_span(row, &q.rows, q.valid);
@@ -566,6 +575,8 @@ pub struct RecordedSpan {
     pub mask: u8,
     /// The quantized rows.
     pub rows: [Row; LANES],
+    /// Their hashes in their frame pixels (what their merges are seeded with).
+    pub hashes: [u32; LANES],
 }
 
 /// The kernel-only replay bound: per tile (bands of `band_lines` lines, tiles of
@@ -600,13 +611,14 @@ pub fn replay_mlab4(
             spans.clear();
             for &i in prims {
                 scene.prims[i as usize].raster(clip, &mut |x, y, mask, l: &SpanLanes| {
-                    let q = l.quantize_with::<Unbiased>(mask);
+                    let q = l.quantize_at::<Unbiased>(mask, frame_pixel(scene, x, y));
                     n += count(q.valid);
                     spans.push(RecordedSpan {
                         x: x - clip.x0,
                         y: y - clip.y0,
                         mask: q.valid,
                         rows: q.rows,
+                        hashes: q.hashes,
                     });
                 });
             }
@@ -618,7 +630,8 @@ pub fn replay_mlab4(
                 let t = std::time::Instant::now();
                 let mut fb = mlab_target::<Unbiased>(&mut target.mlab, clip)?;
                 for s in &spans {
-                    fb.insert_span(s.x, s.y, &s.rows, s.mask).map_err(|e| e.to_string())?;
+                    fb.insert_span_hashed(s.x, s.y, &s.rows, &s.hashes, s.mask)
+                        .map_err(|e| e.to_string())?;
                 }
                 mlab_resolve(&fb, bg, out, w as usize, clip.x0);
                 let dt = t.elapsed().as_secs_f64();

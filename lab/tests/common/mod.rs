@@ -4,15 +4,18 @@
 use oit_lab::methods::{BinnedStream, Image, Method};
 use oit_lab::stream::{Frag, Stream};
 
-/// A 1x1 stream from `(depth, premultiplied color, alpha)` in submission order.
+/// A 1x1 stream from `(depth, premultiplied color, alpha)` in submission order, each
+/// fragment its own primitive (its index).
 pub fn pixel(frags: &[(f32, [f32; 3], f32)], bg: [f32; 3]) -> Stream {
     let frags = frags
         .iter()
-        .map(|&(depth, color, alpha)| Frag {
+        .enumerate()
+        .map(|(i, &(depth, color, alpha))| Frag {
             pixel: 0,
             depth,
             color,
             alpha,
+            prim: i as u32,
         })
         .collect();
     Stream {
