@@ -172,7 +172,7 @@ pub enum Sort {
     /// fragments as given.
     Gpu,
     /// On the CPU: a stable counting sort by pixel; the GPU receives the fragments in that order
-    /// and the offsets (host memory: 28 bytes per fragment).
+    /// and the offsets (host memory: 36 bytes per fragment).
     /// Faster on a software driver such as lavapipe, which runs the GPU's work on the same CPU
     /// cores (`docs/gpu.md`, "Throughput").
     Cpu,
@@ -437,7 +437,7 @@ impl Compositor {
     }
 
     /// Bytes of the largest binding of a band of `pixels` stored pixels and `n` fragments: its
-    /// rows, offsets, fragments (24 bytes each) or sort keys (8 bytes per padded key).
+    /// rows, offsets, fragments (32 bytes each) or sort keys (8 bytes per padded key).
     fn band_bytes(&self, pixels: u64, n: u64) -> u64 {
         let rows = pixels * slots(self.layers) as u64 * 8;
         rows.max(4 * (pixels + 1))
