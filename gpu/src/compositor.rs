@@ -142,10 +142,11 @@ const LOOP_LIMIT: u32 = 65_535;
 /// iterations) and runs, per fragment, one iteration of the fragment loop and at most `R` of the
 /// insert's (Listing 1: `M - 1`, Listing 2: `K`; the merges and tail adds have no loop).
 /// `R = 1`: 32,766; `R = 9` (HT 8): 6,551.
-pub(crate) const fn chunk(layers: Layers) -> u32 {
+const fn chunk(layers: Layers) -> u32 {
     let r = slots(layers) as u32;
     (LOOP_LIMIT - 2 * r) / (r + 1)
 }
+
 /// Invocations per workgroup (`@workgroup_size(64)` in `composite.wgsl`).
 const WORKGROUP: u32 = 64;
 /// The most bytes one storage binding may hold: WebGPU's default
