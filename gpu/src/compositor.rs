@@ -928,3 +928,29 @@ fn scoped<T>(device: &wgpu::Device, f: impl FnOnce() -> T, wrap: fn(String) -> G
         None => Ok(value),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{LOOP_LIMIT, chunk};
+    use crate::cpu::slots;
+    use mlab::Layers;
+
+    /// Every size's chunk keeps an invocation's loop iterations (2 R for the slots, R + 1 per
+    /// fragment) within lavapipe's limit, and is the largest that does.
+    #[test]
+    fn the_chunk_of_every_size_fits_the_loop_limit() {
+        let all = Layers::SIZES
+            .into_iter()
+            .map(Layers::Mlab)
+            .chain(Layers::SIZES.into_iter().map(Layers::Hybrid));
+        for layers in all {
+            let r = slots(layers) as u32;
+            let iterations = |c: u32| 2 * r + c * (r + 1);
+            assert!(iterations(chunk(layers)) <= LOOP_LIMIT, "{layers:?}");
+            assert!(iterations(chunk(layers) + 1) > LOOP_LIMIT, "{layers:?}");
+        }
+        assert_eq!(chunk(Layers::Mlab(1)), 32_766);
+        assert_eq!(chunk(Layers::Mlab(8)), 7_279);
+        assert_eq!(chunk(Layers::Hybrid(8)), 6_551);
+    }
+}
