@@ -395,7 +395,7 @@ pub fn evaluate_command(
     let runtime = |n: usize, name: &str| {
         if !mlab::Layers::SIZES.contains(&n) {
             println!(
-                "  ({name} = {n} is beyond the run-time DynFramebuffer and the C API ({name} = 1..=8): \
+                "  ({name} = {n} is not a size of the run-time DynFramebuffer and the C API ({name} = 1..=8): \
                  use the compile-time size, e.g. SpanFramebuffer::<{n}> or HybridSpanFramebuffer::<{n}>)"
             );
         }
