@@ -33,12 +33,20 @@ const SPANS: usize = W * H / LANES;
 /// Spans of the small target (32 x 32 pixels, 32 KiB of rows at M = 4: in L1).
 const SMALL_SPANS: usize = 32 * 32 / LANES;
 
-/// One span operation: span index, one row per lane, coverage mask.
+/// One span operation: span index, one row per lane, each row's fragment hash (its key and
+/// pixel, `mlab::fragment_hash`: what a framebuffer's quantization hands its insert), coverage
+/// mask.
 #[derive(Clone, Copy)]
 struct Step {
     span: usize,
     rows: [Row; LANES],
+    hashes: [u32; LANES],
     mask: u8,
+}
+
+/// The hashes of a step's fragments: keys numbered in stream order, pixels of span `span`.
+fn hashes(key: usize, span: usize) -> [u32; LANES] {
+    core::array::from_fn(|l| mlab::fragment_hash((key * LANES + l) as u32, (span * LANES + l) as u32))
 }
 
 fn fragment_row(rng: &mut Rng, depth: f32) -> Row {
@@ -50,13 +58,18 @@ fn fragment_row(rng: &mut Rng, depth: f32) -> Row {
 fn random_stream(spans: usize) -> Vec<Step> {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
     (0..8192)
-        .map(|_| {
+        .map(|i| {
             let span = (rng.next_u64() % spans as u64) as usize;
             let rows = core::array::from_fn(|_| {
                 let z = 100.0 * rng.unit();
                 fragment_row(&mut rng, z)
             });
-            Step { span, rows, mask: 0xff }
+            Step {
+                span,
+                rows,
+                hashes: hashes(i, span),
+                mask: 0xff,
+            }
         })
         .collect()
 }
@@ -82,9 +95,11 @@ fn coherent_stream() -> Vec<Step> {
                 // A slight depth gradient along x, as a sloped primitive.
                 let rows =
                     core::array::from_fn(|l| Row::new(row.color(), row.transmittance(), z0 + 0.01 * (sx + l) as f32));
+                let span = (y * W + sx) / LANES;
                 steps.push(Step {
-                    span: (y * W + sx) / LANES,
+                    span,
                     rows,
+                    hashes: hashes(steps.len(), span),
                     mask,
                 });
                 sx += LANES;
@@ -103,7 +118,7 @@ fn mlab_scalar<A: Arithmetic, const M: usize>(pixels: &mut [[Row; M]], stream: &
     for s in stream {
         for (lane, row) in s.rows.iter().enumerate() {
             if s.mask & (1 << lane) != 0 {
-                listing1::insert_with::<A, M>(&mut pixels[s.span * LANES + lane], *row);
+                listing1::insert_hashed::<A, M>(&mut pixels[s.span * LANES + lane], *row, s.hashes[lane]);
             }
         }
     }
@@ -112,7 +127,7 @@ fn mlab_scalar<A: Arithmetic, const M: usize>(pixels: &mut [[Row; M]], stream: &
 #[inline(never)] // a symbol of its own, for callgrind (benches/callgrind.sh)
 fn mlab_lanes<A: Arithmetic, const M: usize>(spans: &mut [MlabSpan<M>], stream: &[Step]) {
     for s in stream {
-        lanes::mlab_insert_with::<A, M>(&mut spans[s.span], &s.rows, s.mask);
+        lanes::mlab_insert_hashed::<A, M>(&mut spans[s.span], &s.rows, &s.hashes, s.mask);
     }
 }
 
@@ -125,7 +140,7 @@ fn mlab_lanes_pixel_major<const M: usize>(pixels: &mut [[Row; M]], stream: &[Ste
             .try_into()
             .expect("8 pixels");
         let mut span = from_pixel_major(chunk);
-        lanes::mlab_insert_with::<mlab::Unbiased, _>(&mut span, &s.rows, s.mask);
+        lanes::mlab_insert_hashed::<mlab::Unbiased, _>(&mut span, &s.rows, &s.hashes, s.mask);
         *chunk = to_pixel_major(&span);
     }
 }

@@ -44,11 +44,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 _ => (r >> 8 & 0xffff) as f32 / 65535.0,
             };
             let c = |s: u32| ((r >> s) & 0xff) as f32 / 255.0 * a;
-            GpuFragment {
-                pixel: ((r >> 32) % u64::from(w * h)) as u32,
-                rgba: [c(16), c(24), c(40), a],
-                depth: (r >> 48) as f32 / 65536.0,
-            }
+            GpuFragment::new(
+                ((r >> 32) % u64::from(w * h)) as u32,
+                [c(16), c(24), c(40), a],
+                (r >> 48) as f32 / 65536.0,
+            )
         })
         .collect();
 

@@ -32,17 +32,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         _ => Arith::Unbiased,
     };
 
-    // The fragments, in mesh order (unsorted), premultiplied by the kernel's own constructor.
+    // The fragments, in mesh order (unsorted), premultiplied by the kernel's own constructor,
+    // keyed by their triangle's index (a primitive id: Unbiased's dithers stay put as the
+    // camera moves).
     let mut fragments = Vec::new();
-    for t in &raster::scene(W, H, 96, 48) {
+    for (prim, t) in (0u32..).zip(&raster::scene(W, H, 96, 48)) {
         raster::rasterize(t, W, H, |x, y, z| {
             if let Ok(f) = Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z) {
                 let c = f.color();
-                fragments.push(GpuFragment {
-                    pixel: y * W + x,
-                    rgba: [c.x, c.y, c.z, f.alpha()],
-                    depth: z,
-                });
+                fragments.push(GpuFragment::new(y * W + x, [c.x, c.y, c.z, f.alpha()], z).with_key(prim));
             }
         });
     }

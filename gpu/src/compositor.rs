@@ -8,16 +8,60 @@ use wgpu::util::DeviceExt;
 
 /// One fragment for [`Compositor::composite`]: its pixel (`y * width + x`), premultiplied linear
 /// `[R, G, B, A]` and depth, as [`mlab::Fragment::premultiplied_rgba`] takes them (validated the
-/// same way).
+/// same way), and optionally a stable key ([`mlab::Fragment::with_key`]: the primitive's id,
+/// which seeds [`mlab::Unbiased`]'s dithers so that they do not re-roll from frame to frame).
+///
+/// The layout is what the GPU reads (8 words, `composite.wgsl`), so a renderer that writes
+/// fragments from a shader writes the same words: `keyed` is a `u32` flag rather than an
+/// `Option` for that reason. Build one with [`GpuFragment::new`] and
+/// [`with_key`](GpuFragment::with_key).
+///
+/// ```
+/// use mlab_gpu::GpuFragment;
+/// let f = GpuFragment::new(5, [0.02, 0.0, 0.0, 0.02], 2.0).with_key(42);
+/// assert_eq!(f.key(), Some(42));
+/// assert_eq!(GpuFragment::new(5, [0.0; 4], 2.0).key(), None); // the content key seeds it
+/// ```
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct GpuFragment {
-    /// `y * width + x`.
+    /// `y * width + x`: where it is inserted, and the pixel id of its hash
+    /// ([`mlab::fragment_hash`]; the kernel's `Framebuffer::pixel_id`).
     pub pixel: u32,
     /// Premultiplied color and alpha.
     pub rgba: [f32; 4],
     /// Depth (smaller = nearer).
     pub depth: f32,
+    /// The stable key, read only when `keyed` is not 0.
+    pub key: u32,
+    /// Not 0: `key` is the fragment's stable key ([`mlab::Fragment::with_key`]); 0: it has
+    /// none, and its dithers are seeded with its content key (the XOR of the bits of its five
+    /// f32, [`mlab::Fragment::hash`]), which changes with its depth.
+    pub keyed: u32,
+}
+
+impl GpuFragment {
+    /// A fragment without a stable key.
+    pub const fn new(pixel: u32, rgba: [f32; 4], depth: f32) -> GpuFragment {
+        GpuFragment {
+            pixel,
+            rgba,
+            depth,
+            key: 0,
+            keyed: 0,
+        }
+    }
+
+    /// This fragment with the stable key `key` (as [`mlab::Fragment::with_key`]).
+    #[must_use]
+    pub const fn with_key(self, key: u32) -> GpuFragment {
+        GpuFragment { key, keyed: 1, ..self }
+    }
+
+    /// The stable key, if it has one (`keyed` not 0).
+    pub const fn key(&self) -> Option<u32> {
+        if self.keyed != 0 { Some(self.key) } else { None }
+    }
 }
 
 /// How the pixels' slots are laid out in the returned words (the kernel's arrangements).
@@ -87,9 +131,22 @@ impl Gpu {
     }
 }
 
-/// Fragments per pixel per dispatch (`COMPOSITE_CHUNK` in `composite.wgsl`: lavapipe ends an
-/// invocation's loops after 65,535 iterations in all).
-const CHUNK: u32 = 32768;
+/// Loop iterations one invocation may run in all on lavapipe (llvmpipe's gallivm loop limiter:
+/// one counter per shader function, every iteration of every loop, inner loops included unless
+/// the compiler unrolled them; past it the loops silently end).
+const LOOP_LIMIT: u32 = 65_535;
+
+/// Fragments per pixel per dispatch for `layers` (`chunk` in `composite.wgsl`): as many as keep
+/// the loops of one `composite` invocation within [`LOOP_LIMIT`] even when no loop is unrolled.
+/// With `R` slots (`M`, or `K + 1`), an invocation loads and stores its slots (at most `2 R`
+/// iterations) and runs, per fragment, one iteration of the fragment loop and at most `R` of the
+/// insert's (Listing 1: `M - 1`, Listing 2: `K`; the merges and tail adds have no loop).
+/// `R = 1`: 32,766; `R = 9` (HT 8): 6,551.
+const fn chunk(layers: Layers) -> u32 {
+    let r = slots(layers) as u32;
+    (LOOP_LIMIT - 2 * r) / (r + 1)
+}
+
 /// Invocations per workgroup (`@workgroup_size(64)` in `composite.wgsl`).
 const WORKGROUP: u32 = 64;
 /// The most bytes one storage binding may hold: WebGPU's default
@@ -116,7 +173,7 @@ pub enum Sort {
     /// fragments as given.
     Gpu,
     /// On the CPU: a stable counting sort by pixel; the GPU receives the fragments in that order
-    /// and the offsets (host memory: 28 bytes per fragment).
+    /// and the offsets (host memory: 36 bytes per fragment).
     /// Faster on a software driver such as lavapipe, which runs the GPU's work on the same CPU
     /// cores (`docs/gpu.md`, "Throughput").
     Cpu,
@@ -155,7 +212,7 @@ struct Params {
     width: u32,
     line: u32,
     sorted: u32,
-    pad: u32,
+    chunk: u32,
     background: [u32; 4],
 }
 
@@ -381,7 +438,7 @@ impl Compositor {
     }
 
     /// Bytes of the largest binding of a band of `pixels` stored pixels and `n` fragments: its
-    /// rows, offsets, fragments (24 bytes each) or sort keys (8 bytes per padded key).
+    /// rows, offsets, fragments (32 bytes each) or sort keys (8 bytes per padded key).
     fn band_bytes(&self, pixels: u64, n: u64) -> u64 {
         let rows = pixels * slots(self.layers) as u64 * 8;
         rows.max(4 * (pixels + 1))
@@ -699,17 +756,18 @@ impl Compositor {
         } = band;
         let device = &self.device;
         let (gx, gy, pitch) = self.grid(pixels);
-        // Dispatches: one per CHUNK fragments of the most crowded pixel.
-        let passes = sorted.most.div_ceil(CHUNK).max(1);
+        // Dispatches: one per `chunk` fragments of the most crowded pixel.
+        let chunk = chunk(self.layers);
+        let passes = sorted.most.div_ceil(chunk).max(1);
         let params = |pass: u32| Params {
             pixels,
             pitch,
             spans: u32::from(self.layout == Layout::Spans),
-            first: pass * CHUNK,
+            first: pass * chunk,
             width,
             line,
             sorted: u32::from(sorted.keys.is_none()),
-            pad: 0,
+            chunk,
             background: background.unwrap_or([0; 4]),
         };
         // RGBA8 pixels of the band: its lines times the width (at least one word: no empty
@@ -868,5 +926,31 @@ fn scoped<T>(device: &wgpu::Device, f: impl FnOnce() -> T, wrap: fn(String) -> G
     match v.or(o) {
         Some(e) => Err(wrap(e.to_string())),
         None => Ok(value),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{LOOP_LIMIT, chunk};
+    use crate::cpu::slots;
+    use mlab::Layers;
+
+    /// Every size's chunk keeps an invocation's loop iterations (2 R for the slots, R + 1 per
+    /// fragment) within lavapipe's limit, and is the largest that does.
+    #[test]
+    fn the_chunk_of_every_size_fits_the_loop_limit() {
+        let all = Layers::SIZES
+            .into_iter()
+            .map(Layers::Mlab)
+            .chain(Layers::SIZES.into_iter().map(Layers::Hybrid));
+        for layers in all {
+            let r = slots(layers) as u32;
+            let iterations = |c: u32| 2 * r + c * (r + 1);
+            assert!(iterations(chunk(layers)) <= LOOP_LIMIT, "{layers:?}");
+            assert!(iterations(chunk(layers) + 1) > LOOP_LIMIT, "{layers:?}");
+        }
+        assert_eq!(chunk(Layers::Mlab(1)), 32_766);
+        assert_eq!(chunk(Layers::Mlab(8)), 7_279);
+        assert_eq!(chunk(Layers::Hybrid(8)), 6_551);
     }
 }

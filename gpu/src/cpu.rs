@@ -6,7 +6,8 @@ use mlab::{
     Arithmetic, Background, DynFramebuffer, Fragment, Framebuffer, FramebufferError, Layers, Paper, Row, Unbiased,
 };
 
-/// Validates a fragment as the compositor does.
+/// Validates a fragment as the compositor does; the [`Fragment`] carries its stable key, if
+/// it has one.
 pub(crate) fn validate(index: usize, f: &GpuFragment, pixels: u32) -> Result<Fragment, GpuError> {
     if f.pixel >= pixels {
         return Err(GpuError::PixelOutOfRange {
@@ -15,7 +16,12 @@ pub(crate) fn validate(index: usize, f: &GpuFragment, pixels: u32) -> Result<Fra
             pixels,
         });
     }
-    Fragment::premultiplied_rgba(f.rgba, f.depth).map_err(|error| GpuError::Fragment { index, error })
+    let fragment =
+        Fragment::premultiplied_rgba(f.rgba, f.depth).map_err(|error| GpuError::Fragment { index, error })?;
+    Ok(match f.key() {
+        Some(key) => fragment.with_key(key),
+        None => fragment,
+    })
 }
 
 fn framebuffer_error(layers: Layers, width: u32, height: u32, e: FramebufferError) -> GpuError {
@@ -27,7 +33,8 @@ fn framebuffer_error(layers: Layers, width: u32, height: u32, e: FramebufferErro
 
 /// The storage words of a `width x height` framebuffer of `layers` in the arithmetic `arith`,
 /// cleared, after inserting `fragments` in order with [`Framebuffer::insert`] on the kernel's
-/// [`DynFramebuffer`] (spans); for [`Layout::PixelMajor`] its slots re-indexed pixel by pixel
+/// [`DynFramebuffer`] (spans; each fragment with its stable key when it has one, so its hash is
+/// [`mlab::Fragment::hash`] of its `pixel`); for [`Layout::PixelMajor`] its slots re-indexed pixel by pixel
 /// (`docs/layout.md`). Errors as [`crate::Compositor::composite`].
 pub fn composite(
     layers: Layers,

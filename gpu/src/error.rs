@@ -28,7 +28,7 @@ pub enum GpuError {
         /// The line.
         y: u32,
         /// Bytes it needs in one binding (the largest of its rows, its offsets, its fragments at
-        /// 24 bytes each and its sort keys at 8 bytes per key, padded to a power of two).
+        /// 32 bytes each and its sort keys at 8 bytes per key, padded to a power of two).
         bytes: u64,
         /// The binding limit in bytes.
         limit: u64,

@@ -6,7 +6,10 @@
 //! use mlab_gpu::{Arith, Compositor, Gpu, GpuFragment, Layout};
 //! let gpu = Gpu::new()?; // the first Vulkan adapter (lavapipe on a machine without a GPU)
 //! let compositor = Compositor::new(&gpu, Layers::Mlab(4), Arith::Unbiased, Layout::Spans)?;
-//! let fragments = [GpuFragment { pixel: 5, rgba: [0.5, 0.0, 0.0, 0.5], depth: 2.0 }];
+//! let fragments = [
+//!     GpuFragment::new(5, [0.5, 0.0, 0.0, 0.5], 2.0),
+//!     GpuFragment::new(5, [0.01, 0.0, 0.0, 0.03], 3.0).with_key(17), // the primitive's id
+//! ];
 //! let words = compositor.composite(64, 32, &fragments)?; // the storage, as Row::words
 //! assert_eq!(words, mlab_gpu::cpu::composite(Layers::Mlab(4), Arith::Unbiased, Layout::Spans, 64, 32, &fragments)?);
 //! # Ok::<(), mlab_gpu::GpuError>(())
@@ -27,8 +30,9 @@ pub use error::GpuError;
 pub enum Arith {
     /// [`mlab::Paper`]: round to nearest, the paper's tail.
     Paper,
-    /// [`mlab::Unbiased`] (the kernel's default): dithered merges and faint fragments, the
-    /// 64-bit [`mlab::Tail`].
+    /// [`mlab::Unbiased`] (the kernel's default): dithered merges and faint fragments (seeded
+    /// by each fragment's hash in its pixel, [`mlab::fragment_hash`]), merged rows at their
+    /// opacity-weighted depth, the 64-bit [`mlab::Tail`].
     Unbiased,
 }
 

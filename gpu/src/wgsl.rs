@@ -5,7 +5,12 @@
 //! f32 depth), a tail is a `vec2<u32>` holding the tail's two little-endian words. Fragments are
 //! passed as the bit patterns of their f32 fields (`bitcast<u32>(v)`), premultiplied color,
 //! alpha and depth, already validated as [`mlab::Fragment`] validates them (finite, color and
-//! alpha in `[0, 1]`): the shader does not re-check.
+//! alpha in `[0, 1]`): the shader does not re-check. Quantization and merges take the
+//! fragment's hash `h = mlab_fragment_hash(key, pixel)` ([`mlab::fragment_hash`]), which
+//! seeds [`mlab::Unbiased`]'s dithers: `key` is the fragment's stable key
+//! ([`mlab::Fragment::with_key`], the primitive's id) or, without one,
+//! `mlab_content_key(c, a, z)` (the XOR of the five f32 bit patterns, as
+//! [`mlab::Fragment::hash`]); `pixel` is the framebuffer's pixel id, `y * width + x`.
 //!
 //! No f32 arithmetic is used: the kernel's two f32 steps (the quantization `floor(v * 255 + u)`
 //! and the faint test `alpha * 255 < 16`) are exact integer emulations of the correctly rounded
@@ -24,10 +29,14 @@
 //!
 //! ```wgsl
 //! var rows: array<vec2<u32>, MLAB_M>;           // the pixel's rows, loaded from storage
-//! let row = mlab_quantize(vec3<u32>(bitcast<u32>(c.r), bitcast<u32>(c.g), bitcast<u32>(c.b)),
-//!                         bitcast<u32>(alpha), bitcast<u32>(depth));
-//! mlab_insert(&rows, row);                      // Listing 1, then store the rows back
+//! let c = vec3<u32>(bitcast<u32>(r), bitcast<u32>(g), bitcast<u32>(b));
+//! let a = bitcast<u32>(alpha);
+//! let z = bitcast<u32>(depth);
+//! let h = mlab_fragment_hash(primitive_key, y * width + x); // or mlab_content_key(c, a, z)
+//! mlab_insert(&rows, mlab_quantize(c, a, z, h), h); // Listing 1, then store the rows back
 //! ```
+//!
+//! (HT: `ht_insert(&head, &tail, mlab_quantize(c, a, z, h))`; HT's insert has no merge.)
 //!
 //! Every name the text defines starts with `mlab_`, `ht_` or `composite_` (and the constants
 //! `MLAB_M`, `HT_K`, `MLAB_EMPTY_ROW`, `MLAB_EMPTY_TAIL`). One method and size per shader module.
@@ -35,9 +44,11 @@
 use crate::{Arith, GpuError};
 use mlab::Layers;
 
-/// The functions shared by every method: depth test, dithers, the exact f32 emulation,
-/// quantization (`mlab_quantize_paper`, `mlab_quantize_unbiased`), merges (`mlab_merge_paper`,
-/// `mlab_merge_unbiased`), tail adds (`mlab_tail_add_paper`, `mlab_tail_add_wide`) and the
+/// The functions shared by every method: depth test, the fragment hash (`mlab_lowbias32`,
+/// `mlab_fragment_hash`, `mlab_content_key`, `mlab_row_hash`), the exact f32 emulation,
+/// quantization (`mlab_quantize_paper`, `mlab_quantize_unbiased`: `(c, a, z, h)`), merges
+/// (`mlab_merge_paper`, `mlab_merge_unbiased`: `(front, back, h)`; Unbiased's depth is
+/// `mlab_centroid_depth`), tail adds (`mlab_tail_add_paper`, `mlab_tail_add_wide`) and the
 /// integer resolve's `mlab_q15` and `mlab_resolve_pixel`.
 pub const KERNEL: &str = include_str!("wgsl/kernel.wgsl");
 
@@ -88,8 +99,8 @@ pub fn mlab(m: usize, arith: Arith) -> Result<String, GpuError> {
     let a = arith.name();
     Ok(format!(
         "{KERNEL}\n// mlab_gpu::wgsl::mlab({m}, {a})\nconst MLAB_M: u32 = {m}u;\n\
-         fn mlab_merge(front: vec2<u32>, back: vec2<u32>) -> vec2<u32> {{\n    return mlab_merge_{a}(front, back);\n}}\n\
-         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z);\n}}\n\n{MLAB_INSERT}"
+         fn mlab_merge(front: vec2<u32>, back: vec2<u32>, h: u32) -> vec2<u32> {{\n    return mlab_merge_{a}(front, back, h);\n}}\n\
+         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32, h: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z, h);\n}}\n\n{MLAB_INSERT}"
     ))
 }
 
@@ -109,7 +120,7 @@ pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
         "{KERNEL}\n// mlab_gpu::wgsl::hybrid({k}, {a})\nconst HT_K: u32 = {k}u;\n\
          fn ht_tail_add(tail: vec2<u32>, row: vec2<u32>) -> vec2<u32> {{\n    return mlab_tail_add_{tail}(tail, row);\n}}\n\
          fn ht_tail_fields(tail: vec2<u32>) -> ht_fields {{\n    return ht_tail_fields_{tail}(tail);\n}}\n\
-         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z);\n}}\n\n{HT_INSERT}\n{HT_RESOLVE}"
+         fn mlab_quantize(c: vec3<u32>, a: u32, z: u32, h: u32) -> vec2<u32> {{\n    return mlab_quantize_{a}(c, a, z, h);\n}}\n\n{HT_INSERT}\n{HT_RESOLVE}"
     ))
 }
 

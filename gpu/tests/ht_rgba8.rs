@@ -338,15 +338,17 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
     // small alpha sums (route A, u < 1/2: g = h phi).
     streams.push(
         (0..4000)
-            .map(|i| GpuFragment {
-                pixel: i % n,
-                rgba: [
-                    0.5 / 255.0,
-                    1.0 / 255.0,
-                    0.0,
-                    [1.0 / 255.0, 15.9 / 255.0, 3.0 / 255.0][(i % 3) as usize],
-                ],
-                depth: (i / n) as f32 * 0.25,
+            .map(|i| {
+                GpuFragment::new(
+                    i % n,
+                    [
+                        0.5 / 255.0,
+                        1.0 / 255.0,
+                        0.0,
+                        [1.0 / 255.0, 15.9 / 255.0, 3.0 / 255.0][(i % 3) as usize],
+                    ],
+                    (i / n) as f32 * 0.25,
+                )
             })
             .collect(),
     );
@@ -368,10 +370,12 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
     // default tail's count saturate).
     streams.push(
         (0..7000u32)
-            .map(|i| GpuFragment {
-                pixel: i % 3,
-                rgba: [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
-                depth: (i % 1000) as f32,
+            .map(|i| {
+                GpuFragment::new(
+                    i % 3,
+                    [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
+                    (i % 1000) as f32,
+                )
             })
             .collect(),
     );
@@ -404,6 +408,12 @@ fn ht_rgba8_from_the_compositor_is_the_kernels_for_every_k_and_arithmetic() {
                 .map(|(w, h, n)| (w, h, (0..n).map(|_| rng.fragment_in(w * h)).collect()))
                 .collect();
             streams.extend(adversarial(&mut rng, 13 * 3).into_iter().map(|s| (13, 3, s)));
+            // The random streams again with stable keys on most fragments (HT's head and tail
+            // take no hash: the keys reach the bytes through the faint fragments' dither).
+            for s in 0..3 {
+                let (w, h, frags) = streams[s].clone();
+                streams.push((w, h, rng.keyed(frags)));
+            }
             for (i, (w, h, frags)) in streams.iter().enumerate() {
                 // Transparent, and one opaque background in turn.
                 for bg in [bgs[0], bgs[1 + (config + i) % (bgs.len() - 1)]] {
@@ -427,15 +437,17 @@ fn ht_rgba8_at_the_tails_count_limits_is_the_kernels() {
             let mut frags = Vec::new();
             for p in 0..4u32 {
                 let n = k as u32 + limit - 2 + p;
-                frags.extend((0..n).map(|i| GpuFragment {
-                    pixel: p,
-                    rgba: [
-                        (i % 7) as f32 / 1785.0 + 1.0 / 255.0,
-                        0.0,
-                        0.002,
-                        if i % 5 == 0 { 0.003 } else { 0.0 },
-                    ],
-                    depth: i as f32,
+                frags.extend((0..n).map(|i| {
+                    GpuFragment::new(
+                        p,
+                        [
+                            (i % 7) as f32 / 1785.0 + 1.0 / 255.0,
+                            0.0,
+                            0.002,
+                            if i % 5 == 0 { 0.003 } else { 0.0 },
+                        ],
+                        i as f32,
+                    )
                 }));
             }
             let c = Compositor::new(&gpu, Layers::Hybrid(k), arith, Layout::PixelMajor).expect("compositor");

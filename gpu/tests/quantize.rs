@@ -4,8 +4,8 @@
 //!
 //! Notation: `v` is a color channel or alpha (an f32 in `[0, 1]`), `u` a dither: `0.5` (the
 //! paper's rounding and every non-faint fragment) or `(h + 0.5) / 256` for `h` in `0..=255`
-//! (faint fragments of `Unbiased`), so `u = U / 512` with `U` odd in `1..=511`, or `U = 256`.
-//! The kernel computes `fl(fl(v * 255) + u)` and truncates; a contracted FMA computes
+//! (faint fragments of `Unbiased`; `h` is the top byte of the fragment's hash), so
+//! `u = U / 512` with `U` odd in `1..=511`, or `U = 256`. The kernel computes `fl(fl(v * 255) + u)` and truncates; a contracted FMA computes
 //! `fl(v * 255 + u)` (one rounding).
 //!
 //! Which pairs can differ: let `p = v * 255` exactly (at most 32 significant bits: exact in

@@ -47,7 +47,7 @@ fn random_stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<GpuFragment> {
 fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
     let Some(gpu) = gpu("random_streams") else { return };
     let mut rng = Rng(0x6d6c_6162_6770_7531);
-    let mut total = 0usize;
+    let (mut total, mut keyed) = (0usize, 0usize);
     for layers in all_layers() {
         for arith in Arith::ALL {
             // Spans (the DynFramebuffer's storage) for every size, pixel-major for every other.
@@ -57,14 +57,23 @@ fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
                 Layout::Spans
             };
             let c = Compositor::new(&gpu, layers, arith, layout).expect("compositor");
-            for (w, h, n) in [(37, 23, 24_000), (8, 1, 3_000), (1, 1, 600), (64, 20, 9_000)] {
-                let frags = random_stream(&mut rng, w, h, n);
+            // The first and third streams with stable keys on most fragments (and content keys
+            // on the others), the second and fourth with content keys only.
+            for (s, (w, h, n)) in [(37, 23, 24_000), (8, 1, 3_000), (1, 1, 600), (64, 20, 9_000)]
+                .into_iter()
+                .enumerate()
+            {
+                let mut frags = random_stream(&mut rng, w, h, n);
+                if s % 2 == 0 {
+                    frags = rng.keyed(frags);
+                    keyed += frags.iter().filter(|f| f.key().is_some()).count();
+                }
                 check(&c, layers, arith, layout, w, h, &frags);
                 total += n;
             }
         }
     }
-    println!("random: {total} fragments through the GPU and the CPU, identical rows");
+    println!("random: {total} fragments ({keyed} with a stable key) through the GPU and the CPU, identical rows");
     assert!(total >= 1_000_000);
 }
 
@@ -73,11 +82,13 @@ fn every_layout_and_arithmetic_on_the_same_stream() {
     let Some(gpu) = gpu("layouts") else { return };
     let mut rng = Rng(7);
     let frags = random_stream(&mut rng, 19, 5, 4_000);
+    let keyed = rng.keyed(frags.clone());
     for layers in [Layers::Mlab(3), Layers::Hybrid(7)] {
         for arith in Arith::ALL {
             for layout in [Layout::PixelMajor, Layout::Spans] {
                 let c = Compositor::new(&gpu, layers, arith, layout).expect("compositor");
                 check(&c, layers, arith, layout, 19, 5, &frags);
+                check(&c, layers, arith, layout, 19, 5, &keyed);
             }
         }
     }
@@ -90,10 +101,12 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
     // Many faint fragments per pixel (the dithers), distinct depths.
     streams.push(
         (0..20_000)
-            .map(|i| GpuFragment {
-                pixel: i % n,
-                rgba: [0.5 / 255.0, 1.0 / 255.0, 0.0, 1.0 / 255.0],
-                depth: (i / n) as f32 * 0.25,
+            .map(|i| {
+                GpuFragment::new(
+                    i % n,
+                    [0.5 / 255.0, 1.0 / 255.0, 0.0, 1.0 / 255.0],
+                    (i / n) as f32 * 0.25,
+                )
             })
             .collect(),
     );
@@ -103,11 +116,11 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
         (0..20_000u32)
             .map(|i| {
                 let v = f32::from_bits(0x37c0_c080 + (i % 64) * 0x0010_0000);
-                GpuFragment {
-                    pixel: i % n,
-                    rgba: [v, v * 0.5, v * 2.0, 15.9 / 255.0],
-                    depth: f32::from_bits(0x3f80_0000 + i),
-                }
+                GpuFragment::new(
+                    i % n,
+                    [v, v * 0.5, v * 2.0, 15.9 / 255.0],
+                    f32::from_bits(0x3f80_0000 + i),
+                )
             })
             .collect(),
     );
@@ -125,10 +138,12 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
     // Saturating tails: thousands of bright fragments into a few pixels.
     streams.push(
         (0..30_000u32)
-            .map(|i| GpuFragment {
-                pixel: i % 3,
-                rgba: [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
-                depth: (i % 1000) as f32,
+            .map(|i| {
+                GpuFragment::new(
+                    i % 3,
+                    [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
+                    (i % 1000) as f32,
+                )
             })
             .collect(),
     );
@@ -139,6 +154,21 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
             f.rgba = [0.0, 0.0, 0.0, 0.0];
         }
     }));
+    // Stable keys: a faint fog of layers, one key per layer (the same key in every pixel: the
+    // pixel id alone varies the hash), and the critical values with one key per fragment.
+    let fog = streams[0]
+        .iter()
+        .enumerate()
+        .map(|(i, f)| f.with_key(i as u32 / n))
+        .collect();
+    streams.push(fog);
+    let critical = streams[1].iter().map(|f| f.with_key(f.depth.to_bits())).collect();
+    streams.push(critical);
+    // Coplanar, opaque and mixed streams with mixed keys.
+    for s in 2..5 {
+        let keyed = rng.keyed(streams[s].clone());
+        streams.push(keyed);
+    }
     streams
 }
 
@@ -165,6 +195,49 @@ fn adversarial_streams_match_the_cpu() {
     println!("adversarial: {total} fragments, identical rows");
 }
 
+/// The color bytes of the words (every first word of a slot).
+fn colors(words: &[u32]) -> Vec<u32> {
+    words.iter().step_by(2).copied().collect()
+}
+
+#[test]
+fn stable_keys_seed_unbiaseds_dithers_on_the_gpu_as_on_the_cpu_and_paper_ignores_them() {
+    let Some(gpu) = gpu("keys") else { return };
+    // A faint fog: 40 layers over every pixel of 13 x 3 (alpha 0.03: faint, dithered), each
+    // layer one primitive (its key), then the same fog 0.001 further away (a camera move).
+    let (w, h) = (13, 3);
+    let n = w * h;
+    let fog = |shift: f32, keyed: bool| -> Vec<GpuFragment> {
+        (0..40 * n)
+            .map(|i| {
+                let f = GpuFragment::new(i % n, [0.01, 0.02, 0.005, 0.03], (i / n) as f32 + shift);
+                if keyed { f.with_key(1000 + i / n) } else { f }
+            })
+            .collect()
+    };
+    let (plain, keyed) = (fog(0.0, false), fog(0.0, true));
+    let (plain_moved, keyed_moved) = (fog(0.001, false), fog(0.001, true));
+    for layers in [Layers::Mlab(2), Layers::Mlab(8), Layers::Hybrid(2)] {
+        for arith in Arith::ALL {
+            let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
+            let run = |frags: &[GpuFragment]| {
+                check(&c, layers, arith, Layout::Spans, w, h, frags);
+                c.composite(w, h, frags).expect("gpu")
+            };
+            let (p, k, pm, km) = (run(&plain), run(&keyed), run(&plain_moved), run(&keyed_moved));
+            if arith == Arith::Paper {
+                assert_eq!(p, k, "{layers:?}: Paper has no dither, no key changes a byte");
+            } else {
+                assert_ne!(p, k, "{layers:?}: the keys seed Unbiased's dithers");
+                // With keys, the move changes no color byte (the dithers do not re-roll); with
+                // content keys it does.
+                assert_eq!(colors(&k), colors(&km), "{layers:?}: keyed fog moved");
+                assert_ne!(colors(&p), colors(&pm), "{layers:?}: unkeyed fog moved");
+            }
+        }
+    }
+}
+
 #[test]
 fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
     let Some(gpu) = gpu("paper_tail_saturation") else {
@@ -172,11 +245,7 @@ fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
     };
     // 70 000 opaque fragments into one pixel: PaperTail's 16-bit count and alpha saturate.
     let frags: Vec<GpuFragment> = (0..70_000u32)
-        .map(|i| GpuFragment {
-            pixel: 0,
-            rgba: [0.2, 0.1, 1.0, 1.0],
-            depth: (i % 5000) as f32 + 1.0,
-        })
+        .map(|i| GpuFragment::new(0, [0.2, 0.1, 1.0, 1.0], (i % 5000) as f32 + 1.0))
         .collect();
     for arith in Arith::ALL {
         let c = Compositor::new(&gpu, Layers::Hybrid(1), arith, Layout::PixelMajor).expect("compositor");
@@ -193,11 +262,12 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
     let Some(gpu) = gpu("bands") else { return };
     let mut rng = Rng(99);
     let (w, h) = (30, 40);
-    let frags = random_stream(&mut rng, w, h, 20_000);
+    let frags = random_stream(&mut rng, w, h, 15_000);
+    let frags = rng.keyed(frags);
     for layout in [Layout::PixelMajor, Layout::Spans] {
         let mut c = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, layout).expect("compositor");
         let whole = c.composite(w, h, &frags).expect("one band");
-        // About 12 KB of fragments per line (17 per pixel, 24 bytes each) and 1 KB of rows:
+        // About 12 KB of fragments per line (12.5 per pixel, 32 bytes each) and 1 KB of rows:
         // 16 KiB bindings split the frame into bands of one line.
         c.set_max_binding_bytes(16384);
         assert_eq!(c.max_binding_bytes(), 16384);
@@ -216,11 +286,7 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
 fn bad_input_is_a_typed_error_not_a_panic() {
     let Some(gpu) = gpu("errors") else { return };
     let c = Compositor::new(&gpu, Layers::Mlab(2), Arith::Paper, Layout::Spans).expect("compositor");
-    let ok = GpuFragment {
-        pixel: 0,
-        rgba: [0.1, 0.1, 0.1, 0.5],
-        depth: 1.0,
-    };
+    let ok = GpuFragment::new(0, [0.1, 0.1, 0.1, 0.5], 1.0);
     let bad = |f: GpuFragment| c.composite(4, 4, &[ok, f]);
     assert_eq!(
         bad(GpuFragment { pixel: 16, ..ok }),
@@ -324,15 +390,33 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
 #[test]
 fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
     let Some(gpu) = gpu("long_pixels") else { return };
-    // Pixel 0: 100 000 fragments (lavapipe ends an invocation's loops after 65,535 iterations:
-    // four dispatches of at most 32 768); the others a few, so later dispatches leave them untouched.
+    // Pixel 0: 100 000 fragments (lavapipe ends an invocation's loops after 65,535 iterations in
+    // all, inner loops included: dispatches of 32,766 fragments for M = 1 down to 6,551 for
+    // K = 8, 4 to 16 of them); the others a few, so later dispatches leave them untouched.
     let mut rng = Rng(5);
     let mut frags: Vec<GpuFragment> = (0..100_000).map(|_| rng.fragment(0)).collect();
     frags.extend((0..500).map(|_| rng.fragment_in(6)));
-    for layers in [Layers::Mlab(1), Layers::Mlab(5), Layers::Hybrid(2)] {
+    // Most with stable keys: every dispatch seeds the merges with the same hashes as the CPU.
+    let frags = rng.keyed(frags);
+    // A stream in which every fragment shows in the bytes (in the random one, the nearest
+    // opaque fragments hide most of the others): pixel 0 receives 100 000 coplanar fragments of
+    // alpha 0 (T = 255: the merges add colors exactly, in both arithmetics), blue 1/255 each
+    // (visible: each reaches HT's tail and its count), red 1/255 on every 400th and green on
+    // every 397th. The red and green bytes (MLAB's rows, HT's tail sums) count those, so a
+    // fragment lost anywhere changes a byte.
+    let counting: Vec<GpuFragment> = (0..100_000u32)
+        .map(|i| {
+            let mark = |k| if i % k == 0 { 1.0 / 255.0 } else { 0.0 };
+            GpuFragment::new(0, [mark(400), mark(397), 1.0 / 255.0, 0.0], 1.0)
+        })
+        .collect();
+    for layers in all_layers() {
         for arith in Arith::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::PixelMajor).expect("compositor");
-            check(&c, layers, arith, Layout::PixelMajor, 3, 2, &frags);
+            check(&c, layers, arith, Layout::PixelMajor, 1, 1, &counting);
+            if matches!(layers, Layers::Mlab(1 | 5 | 8) | Layers::Hybrid(2 | 8)) {
+                check(&c, layers, arith, Layout::PixelMajor, 3, 2, &frags);
+            }
         }
     }
 }
@@ -349,18 +433,24 @@ fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
         raster::rasterize(t, w, h, |x, y, z| {
             let f = mlab::Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z).expect("valid");
             let c = f.color();
-            frags.push(GpuFragment {
-                pixel: y * w + x,
-                rgba: [c.x, c.y, c.z, f.alpha()],
-                depth: z,
-            });
+            frags.push(GpuFragment::new(y * w + x, [c.x, c.y, c.z, f.alpha()], z));
         });
     }
     assert!(frags.len() > 10_000);
+    // The same fragments keyed by their triangle, as a renderer keys them by primitive id.
+    let mut keyed = Vec::new();
+    for (prim, t) in (0u32..).zip(&raster::scene(w, h, 48, 24)) {
+        raster::rasterize(t, w, h, |x, y, z| {
+            let f = mlab::Fragment::straight(mlab::glam::Vec3::from_array(t.color), t.alpha, z).expect("valid");
+            let c = f.color();
+            keyed.push(GpuFragment::new(y * w + x, [c.x, c.y, c.z, f.alpha()], z).with_key(prim));
+        });
+    }
     for layers in [Layers::Mlab(2), Layers::Mlab(4), Layers::Hybrid(3)] {
         for arith in Arith::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
             check(&c, layers, arith, Layout::Spans, w, h, &frags);
+            check(&c, layers, arith, Layout::Spans, w, h, &keyed);
         }
     }
 }
@@ -382,7 +472,10 @@ fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
             for layout in [Layout::Spans, Layout::PixelMajor] {
                 let c = Compositor::new(&gpu, Layers::Mlab(m), arith, layout).expect("compositor");
                 for (w, h, n) in [(37, 11, 6_000), (8, 2, 800), (1, 1, 50)] {
-                    let frags = random_stream(&mut rng, w, h, n);
+                    let mut frags = random_stream(&mut rng, w, h, n);
+                    if w != 8 {
+                        frags = rng.keyed(frags);
+                    }
                     let bg = backgrounds[rng.below(backgrounds.len() as u32) as usize];
                     let (words, image) = c.composite_rgba8(w, h, &frags, bg).expect("gpu");
                     assert_eq!(words, c.composite(w, h, &frags).expect("gpu rows"));
@@ -400,8 +493,10 @@ fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
         }
     }
     println!("rgba8: {total} fragments, identical images");
-    // Bands give the same image (MLAB here, HT below: HT's RGBA8 is tests/ht_rgba8.rs).
-    let frags = random_stream(&mut rng, 30, 40, 20_000);
+    // Bands give the same image (MLAB here, HT below: HT's RGBA8 is tests/ht_rgba8.rs); about
+    // 12 KB of fragments per line (32 bytes each), bands of one line in 16 KiB bindings.
+    let frags = random_stream(&mut rng, 30, 40, 15_000);
+    let frags = rng.keyed(frags);
     let bg = Background::Opaque(Vec3::new(0.2, 0.4, 0.6));
     let mut c = Compositor::new(&gpu, Layers::Mlab(4), Arith::Unbiased, Layout::Spans).expect("compositor");
     let whole = c.composite_rgba8(30, 40, &frags, bg).expect("one band");
@@ -439,11 +534,11 @@ fn shuffled_coplanar(rng: &mut Rng, w: u32, h: u32, per: u32) -> Vec<GpuFragment
         .into_iter()
         .map(|pixel| {
             let a = 0.07 + 0.05 * rng.unit();
-            GpuFragment {
+            GpuFragment::new(
                 pixel,
-                rgba: [rng.unit() * a, rng.unit() * a, rng.unit() * a, a],
-                depth: rng.below(2) as f32,
-            }
+                [rng.unit() * a, rng.unit() * a, rng.unit() * a, a],
+                rng.below(2) as f32,
+            )
         })
         .collect()
 }
@@ -455,9 +550,11 @@ fn the_gpu_sort_gives_the_stable_order_and_the_cpus_rows() {
     let shuffled = shuffled_coplanar(&mut rng, 37, 11, 40); // 16,280: not a power of two
     let one = vec![rng.fragment(17)];
     let odd = random_stream(&mut rng, 5, 3, 4_021);
+    let keyed = rng.keyed(shuffled.clone());
     let crowded: Vec<GpuFragment> = (0..100_000).map(|_| rng.fragment(0)).collect();
-    let cases: [(&str, u32, u32, &[GpuFragment]); 5] = [
+    let cases: [(&str, u32, u32, &[GpuFragment]); 6] = [
         ("shuffled", 37, 11, &shuffled),
+        ("shuffled, keyed", 37, 11, &keyed),
         ("odd count", 5, 3, &odd),
         ("one", 37, 11, &one),
         ("none", 37, 11, &[]),
@@ -484,7 +581,7 @@ fn the_gpu_sort_gives_the_stable_order_and_the_cpus_rows() {
 fn the_gpu_sort_over_several_bands_is_the_stable_order() {
     let Some(gpu) = gpu("gpu_sort_bands") else { return };
     let mut rng = Rng(0x6261_6e64);
-    // 30 x 40 with 8 fragments per pixel: about 5.8 KB of fragments per line, so a 16 KiB
+    // 30 x 40 with 8 fragments per pixel: about 7.7 KB of fragments per line, so a 16 KiB
     // binding cap gives bands of two lines (20 bands), each sorted on its own.
     let frags = shuffled_coplanar(&mut rng, 30, 40, 8);
     for layout in [Layout::PixelMajor, Layout::Spans] {

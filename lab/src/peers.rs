@@ -47,12 +47,14 @@ pub fn bounded_methods() -> Vec<Method> {
     v
 }
 
-/// The methods of a peers run: the A-buffer, the bounded ones, and AT 4 (which stores every
-/// fragment, as the A-buffer does).
+/// The methods of a peers run: the A-buffer, the bounded ones, AT 4 (which stores every
+/// fragment, as the A-buffer does), and MLAB 4 with f32 rows (the ceiling of MLAB 4's 8-byte
+/// rows: 20 bytes a row, not a candidate of any budget).
 pub fn methods() -> Vec<Method> {
     let mut v = vec![Method::Reference];
     v.extend(bounded_methods());
     v.push(Method::Adaptive(4));
+    v.push(Method::MlabF32(4));
     v
 }
 

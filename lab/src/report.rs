@@ -390,19 +390,35 @@ pub fn evaluate_command(
         Ok(None)
     };
     let bytes = |m: Method| m.storage().per_pixel;
+    // Sizes the run-time framebuffer (and the C API) offers; larger ones are compile-time
+    // sizes of the generic framebuffers (issue 30: a client's cloud got K = 11).
+    let runtime = |n: usize, name: &str| {
+        if !mlab::Layers::SIZES.contains(&n) {
+            println!(
+                "  ({name} = {n} is not a size of the run-time DynFramebuffer and the C API ({name} = 1..=8): \
+                 use the compile-time size, e.g. SpanFramebuffer::<{n}> or HybridSpanFramebuffer::<{n}>)"
+            );
+        }
+    };
     match smallest(&MLAB_SIZES, Method::Mlab)? {
-        Some(m) => println!(
-            "Smallest MLAB reaching {goal}: M = {m} ({} B/px)",
-            bytes(Method::Mlab(m))
-        ),
+        Some(m) => {
+            println!(
+                "Smallest MLAB reaching {goal}: M = {m} ({} B/px)",
+                bytes(Method::Mlab(m))
+            );
+            runtime(m, "M");
+        }
         None => println!("No MLAB up to M = {} reaches {goal}", MLAB_SIZES[MLAB_SIZES.len() - 1]),
     }
     match smallest(&HT_SIZES, Method::Hybrid)? {
-        Some(k) => println!(
-            "Smallest HT reaching {goal}: K = {k} head rows + tail, the paper's HT {} ({} B/px)",
-            k + 1,
-            bytes(Method::Hybrid(k))
-        ),
+        Some(k) => {
+            println!(
+                "Smallest HT reaching {goal}: K = {k} head rows + tail, the paper's HT {} ({} B/px)",
+                k + 1,
+                bytes(Method::Hybrid(k))
+            );
+            runtime(k, "K");
+        }
         None => println!(
             "No HT up to K = {} head rows + tail (the paper's HT {}) reaches {goal}",
             HT_SIZES[HT_SIZES.len() - 1],

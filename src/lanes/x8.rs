@@ -366,15 +366,15 @@ impl Dither8 {
     }
 }
 
-/// [`crate::arith::depth_key`] of the high dword of each 64-bit lane (the low dword gets the
-/// same map, don't-care): its own inverse.
+/// [`crate::arith::depth_key`] of each dword: its own inverse.
 #[inline(always)]
 fn depth_keys(z: u32x8) -> u32x8 {
     z ^ (cast::<i32x8, u32x8>(cast::<u32x8, i32x8>(z) >> 31) & u32x8::splat(0x7fff_ffff))
 }
 
-/// [`crate::arith::centroid_depth`] of the rows of one register (4 rows): the merged depth in
-/// the high dword of each 64-bit lane (the low dwords are don't-care).
+/// [`crate::arith::centroid_depth`] of 8 row pairs, one per dword: `front0` and `back0` hold
+/// the rows' first words (T in the high byte), `zf` and `zb` their depth bits; returns the
+/// merged depths' bits.
 ///
 /// The weight `floor(65535 * cb / den)` is estimated in f32 (`cb / den * 65535`, within
 /// `2^-7` of the quotient, so truncated it is the floor or one off) and corrected once each
@@ -382,15 +382,13 @@ fn depth_keys(z: u32x8) -> u32x8 {
 /// 16-bit products), so it is the integer floor on every backend. The depth step
 /// `floor(diff * w / 65536)` is two 16-bit products of the key difference's halves.
 #[inline(always)]
-fn centroid4(front: u32x8, back: u32x8) -> u32x8 {
+fn centroid8(front0: u32x8, back0: u32x8, zf: u32x8, zb: u32x8) -> u32x8 {
     let i = |v: u32x8| cast::<u32x8, i32x8>(v);
     let u = |v: i32x8| cast::<i32x8, u32x8>(v);
     let u16s = |v: u32x8| cast::<u32x8, u16x16>(v);
     let u32s = |v: u16x16| cast::<u16x16, u32x8>(v);
-    // In the low dwords: T bytes, every value < 2^16 (the high dwords compute the same
-    // formulas on depth bits, in range, and are dropped).
-    let tf = front >> 24;
-    let tb = back >> 24;
+    let tf = front0 >> 24;
+    let tb = back0 >> 24;
     let p = u32s(u16s(tf) * u16s(tb)); // T_f * T_b < 2^16: the low slot's product
     let cb = (tf << 8) - tf - p; // 255 T_f - p = (255 - T_b) T_f
     let den = u32x8::splat(65025) - p;
@@ -404,14 +402,21 @@ fn centroid4(front: u32x8, back: u32x8) -> u32x8 {
     let q = u(i(q) + r.simd_lt(i32x8::ZERO) - r.simd_gt(i(den) - i32x8::splat(1)));
     let gate = i(tf).simd_gt(i32x8::splat(crate::arith::CENTROID_MIN_T as i32 - 1));
     let w = q & u(gate);
-    // The weight in both slots of the high dword, beside the depth.
-    let w = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(w) << 32);
     let w2 = u16s(w | (w << 16));
-    let (kf, kb) = (depth_keys(front), depth_keys(back));
+    let (kf, kb) = (depth_keys(zf), depth_keys(zb));
     let diff = u(i(kb) - i(kf)) & u(i(kb).simd_gt(i(kf)));
     let d = u16s(diff);
     let step = u32s(d.mul_keep_high(w2)) + (u32s(d * w2) >> 16);
     depth_keys(u(i(kf) + i(step)))
+}
+
+/// The rows' first words of 8 lanes in one register, dword `2 i` = row `i`, `2 i + 1` = row
+/// `4 + i` (no shuffle), and their depths in the same order.
+#[inline(always)]
+fn pack_words<const S: bool>(r: Lanes8<S>) -> (u32x8, u32x8) {
+    let w0 = (r.a & LO) | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.b) << 32);
+    let w1 = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.a) >> 32) | (r.b & HI);
+    (w0, w1)
 }
 
 impl<const S: bool> Lanes8<S> {
@@ -488,10 +493,14 @@ impl<const S: bool> RowLanes for Lanes8<S> {
                 b: merge4_paper(front.b, back.b),
             },
             Kind::Unbiased => {
-                let m = |f: u32x8, b: u32x8, d: u16x16| lo_hi(merge4_unbiased(f, b, d), centroid4(f, b));
+                // The depths of all 8 merges in one register (`pack_words`), then back to the
+                // high dwords of their rows.
+                let ((f0, zf), (b0, zb)) = (pack_words(front), pack_words(back));
+                let z = centroid8(f0, b0, zf, zb);
+                let za = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(z) << 32);
                 Lanes8 {
-                    a: m(front.a, back.a, d.a),
-                    b: m(front.b, back.b, d.b),
+                    a: lo_hi(merge4_unbiased(front.a, back.a, d.a), za),
+                    b: lo_hi(merge4_unbiased(front.b, back.b, d.b), z),
                 }
             }
         }
@@ -1114,7 +1123,7 @@ mod tests {
     /// across zero, far apart, +infinity behind, NaN), which covers every weight the f32
     /// estimate and its correction produce.
     #[test]
-    fn centroid4_is_the_scalar_centroid_for_every_pair() {
+    fn centroid8_is_the_scalar_centroid_for_every_pair() {
         let depths: [(f32, f32); 8] = [
             (1.0, 2.0),
             (-3.0, 1.0e30),
@@ -1130,10 +1139,11 @@ mod tests {
                 for (zf, zb) in depths {
                     let fr: [Row; 4] = core::array::from_fn(|i| Row::new([3, 2, 1], tf as u8, zf + i as f32));
                     let bk: [Row; 4] = core::array::from_fn(|i| Row::new([9, 8, 7], (tb + i as u32) as u8, zb));
-                    let got = unpack(centroid4(pack(fr.map(Row::to_le_u64)), pack(bk.map(Row::to_le_u64))));
-                    for i in 0..4 {
-                        let want = crate::arith::centroid_depth(fr[i], bk[i]);
-                        assert_eq!((got[i] >> 32) as u32, want, "T {tf} {}, z {zf} {zb}", tb + i as u32);
+                    let words = |r: [Row; 4], w: usize| u32x8::new(core::array::from_fn(|k| r[k / 2].words()[w]));
+                    let got = centroid8(words(fr, 0), words(bk, 0), words(fr, 1), words(bk, 1)).to_array();
+                    for k in 0..8 {
+                        let want = crate::arith::centroid_depth(fr[k / 2], bk[k / 2]);
+                        assert_eq!(got[k], want, "T {tf} {}, z {zf} {zb}", tb + (k / 2) as u32);
                     }
                 }
             }

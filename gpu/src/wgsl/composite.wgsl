@@ -4,9 +4,10 @@
 //   0 uniform          CompositeParams
 //   1 storage, read    offsets: array<u32>, pixels + 1 entries; pixel p's fragments are
 //                      positions offsets[p] .. offsets[p + 1] in pixel order
-//   2 storage, read    fragments: array<u32>, 6 words per fragment (the layout of
-//                      mlab_gpu::GpuFragment: pixel, bits of premultiplied R, G, B, alpha,
-//                      depth (f32)), in submission order (or in pixel order: `sorted`)
+//   2 storage, read    fragments: array<u32>, COMPOSITE_WORDS words per fragment (the layout
+//                      of mlab_gpu::GpuFragment: pixel, bits of premultiplied R, G, B, alpha,
+//                      depth (f32), key, keyed), in submission order (or in pixel order:
+//                      `sorted`)
 //   3 storage, rw      rows: array<vec2<u32>>, the framebuffer's storage (Row::words)
 //   4 storage, rw      image: array<u32>, RGBA8 pixels (entry point `resolve`)
 //   5 storage, read    order: array<vec2<u32>>, the fragments sorted by pixel, stably: (stored
@@ -18,8 +19,8 @@ struct CompositeParams {
     pitch: u32,
     // 1: 8-pixel layer-major spans (mlab::Spans); 0: pixel-major (mlab::PixelMajor).
     spans: u32,
-    // This dispatch inserts fragments first .. first + COMPOSITE_CHUNK of each pixel; 0 starts
-    // from empty rows, later dispatches load the rows the previous one stored.
+    // This dispatch inserts fragments first .. first + chunk of each pixel; 0 starts from empty
+    // rows, later dispatches load the rows the previous one stored.
     first: u32,
     // Image width, and stored pixels per line (the width, or 8 * ceil(width / 8) for spans).
     width: u32,
@@ -27,18 +28,18 @@ struct CompositeParams {
     // 1: the fragments are already in pixel order (mlab_gpu::Sort::Cpu), binding 5 is not read;
     // 0: fragment i in pixel order is fragments[order[i].y] (mlab_gpu::Sort::Gpu).
     sorted: u32,
-    pad: u32,
+    // Fragments per pixel per dispatch, by the method's size (mlab_gpu's `chunk`). Mesa's
+    // llvmpipe (lavapipe) ends an invocation's loops after 65,535 iterations in all (gallivm's
+    // loop limiter, one counter per shader function, inner loops counted unless the compiler
+    // unrolled them, a guard against endless shaders): a pixel with more would silently lose the
+    // rest. The chunk keeps every loop of an invocation within the limit even with no loop
+    // unrolled; a pixel with more fragments is continued by further dispatches (`first`), which
+    // load its rows back. This also bounds the run time of one invocation (GPU watchdogs).
+    chunk: u32,
     // The background for `resolve`: three channels as mlab_gpu::background_q15 gives them, and
     // w = 1 (opaque) or 0 (Background::Transparent).
     background: vec4<u32>,
 }
-
-// Fragments per pixel per dispatch. Mesa's llvmpipe (lavapipe) ends an invocation's loops after
-// 65,535 iterations in all (gallivm's loop limiter, one counter per shader function, a guard
-// against endless shaders): a pixel with more fragments would silently lose the rest. A pixel
-// with more than COMPOSITE_CHUNK fragments is continued by further dispatches (`first`), which
-// load its rows back; this also bounds the run time of one invocation (GPU watchdogs).
-const COMPOSITE_CHUNK: u32 = 32768u;
 
 @group(0) @binding(0) var<uniform> composite_params: CompositeParams;
 @group(0) @binding(1) var<storage, read> composite_offsets: array<u32>;
@@ -49,14 +50,14 @@ const COMPOSITE_CHUNK: u32 = 32768u;
 @group(0) @binding(4) var<storage, read_write> composite_image: array<u32>;
 
 // The fragments stored pixel p inserts in this `composite` dispatch, as positions start .. end
-// in pixel order (`composite_row`); start > end: nothing to do (past the dispatch's pixels, or an
-// earlier dispatch inserted all of the pixel's fragments and its rows are final).
+// in pixel order (`composite_fragment_at`); start > end: nothing to do (past the dispatch's
+// pixels, or an earlier dispatch inserted all of the pixel's fragments and its rows are final).
 fn composite_range(p: u32) -> vec2<u32> {
     if (p >= composite_params.pixels) {
         return vec2<u32>(1u, 0u);
     }
     let start = composite_offsets[p] + composite_params.first;
-    let end = min(composite_offsets[p + 1u], start + COMPOSITE_CHUNK);
+    let end = min(composite_offsets[p + 1u], start + composite_params.chunk);
     if (composite_params.first != 0u && start >= end) {
         return vec2<u32>(1u, 0u);
     }
@@ -87,12 +88,27 @@ fn composite_slot(p: u32, j: u32, slots: u32) -> u32 {
     return p * slots + j;
 }
 
-// The row of the i-th fragment in pixel order.
-fn composite_row(i: u32) -> vec2<u32> {
-    var k = 6u * i;
+// Words per fragment (mlab_gpu::GpuFragment).
+const COMPOSITE_WORDS: u32 = 8u;
+
+// A fragment quantized into its row, and its hash in its pixel.
+struct composite_fragment {
+    row: vec2<u32>,
+    h: u32,
+}
+
+// The i-th fragment in pixel order: its hash h = mlab_fragment_hash(key, pixel), with its stable
+// key when `keyed` is not 0 and its content key otherwise (mlab::Fragment::hash; the pixel id is
+// the fragment's `pixel`, y * width + x, in every band), and its row quantized with h.
+fn composite_fragment_at(i: u32) -> composite_fragment {
+    var k = COMPOSITE_WORDS * i;
     if (composite_params.sorted == 0u) {
-        k = 6u * composite_order[i].y;
+        k = COMPOSITE_WORDS * composite_order[i].y;
     }
     let c = vec3<u32>(composite_fragments[k + 1u], composite_fragments[k + 2u], composite_fragments[k + 3u]);
-    return mlab_quantize(c, composite_fragments[k + 4u], composite_fragments[k + 5u]);
+    let a = composite_fragments[k + 4u];
+    let z = composite_fragments[k + 5u];
+    let key = select(mlab_content_key(c, a, z), composite_fragments[k + 6u], composite_fragments[k + 7u] != 0u);
+    let h = mlab_fragment_hash(key, composite_fragments[k]);
+    return composite_fragment(mlab_quantize(c, a, z, h), h);
 }

@@ -12,7 +12,7 @@ fn composite(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     var tail = select(composite_rows[composite_slot(p, HT_K, HT_K + 1u)], MLAB_EMPTY_TAIL, composite_params.first == 0u);
     for (var i = range.x; i < range.y; i++) {
-        ht_insert(&head, &tail, composite_row(i));
+        ht_insert(&head, &tail, composite_fragment_at(i).row);
     }
     for (var j = 0u; j < HT_K; j++) {
         composite_rows[composite_slot(p, j, HT_K + 1u)] = head[j];

@@ -11,7 +11,8 @@ fn composite(@builtin(global_invocation_id) gid: vec3<u32>) {
         b[j] = select(composite_rows[composite_slot(p, j, MLAB_M)], MLAB_EMPTY_ROW, composite_params.first == 0u);
     }
     for (var i = range.x; i < range.y; i++) {
-        mlab_insert(&b, composite_row(i));
+        let f = composite_fragment_at(i);
+        mlab_insert(&b, f.row, f.h);
     }
     for (var j = 0u; j < MLAB_M; j++) {
         composite_rows[composite_slot(p, j, MLAB_M)] = b[j];

@@ -25,9 +25,35 @@ fn mlab_depth_le(a: u32, b: u32) -> bool {
     return ka <= kb;
 }
 
-// The 16-bit mix of both dithers: (((x ^ (x >> 16)) & 0xffff) * 0x6a09) & 0xffff.
-fn mlab_mix16(x: u32) -> u32 {
-    return (((x ^ (x >> 16u)) & 0xffffu) * 0x6a09u) & 0xffffu;
+// The 32-bit hash lowbias32 (mlab::lowbias32): x ^= x >> 16; x *= 0x7feb352d; x ^= x >> 15;
+// x *= 0x846ca68b; x ^= x >> 16, u32 multiplications wrapping.
+fn mlab_lowbias32(v: u32) -> u32 {
+    var x = v;
+    x ^= x >> 16u;
+    x *= 0x7feb352du;
+    x ^= x >> 15u;
+    x *= 0x846ca68bu;
+    x ^= x >> 16u;
+    return x;
+}
+
+// The hash of a fragment in a pixel, which seeds both of Unbiased's dithers (mlab::fragment_hash):
+// lowbias32(key ^ lowbias32(pixel)). `key`: the fragment's stable key (mlab::Fragment::with_key)
+// or mlab_content_key; `pixel`: the framebuffer's pixel id, y * width + x.
+fn mlab_fragment_hash(key: u32, pixel: u32) -> u32 {
+    return mlab_lowbias32(key ^ mlab_lowbias32(pixel));
+}
+
+// The content key of a fragment without a stable key (mlab::Fragment::hash): the XOR of the bits
+// of its premultiplied r, g, b, alpha and depth.
+fn mlab_content_key(c: vec3<u32>, a: u32, z: u32) -> u32 {
+    return c.x ^ c.y ^ c.z ^ a ^ z;
+}
+
+// The hash of an already quantized row inserted without its fragment (mlab::mlab::row_hash): the
+// row's content key word0 ^ word1 in pixel `pixel`.
+fn mlab_row_hash(row: vec2<u32>, pixel: u32) -> u32 {
+    return mlab_fragment_hash(row.x ^ row.y, pixel);
 }
 
 // Significand (implicit bit included) and effective biased exponent of a non-negative finite f32.
@@ -114,21 +140,22 @@ fn mlab_quantize_with(c: vec3<u32>, a: u32, z: u32, u: u32) -> vec2<u32> {
     return vec2<u32>(r | (g << 8u) | (b << 16u) | (t << 24u), z);
 }
 
-// Paper::quantize: every channel floor(v * 255 + 0.5).
-fn mlab_quantize_paper(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {
+// Paper::quantize: every channel floor(v * 255 + 0.5). `h` (the fragment's hash) is not read:
+// the signature of every quantization, as mlab::Arithmetic::quantize.
+fn mlab_quantize_paper(c: vec3<u32>, a: u32, z: u32, h: u32) -> vec2<u32> {
     return mlab_quantize_with(c, a, z, 0x3f000000u);
 }
 
-// Unbiased::quantize: faint fragments (alpha * 255 < 16 in f32) with u = (h + 0.5) / 256,
-// h = mix16(bits(r) ^ bits(g) ^ bits(b) ^ bits(alpha) ^ bits(depth)) >> 8; others as Paper.
-fn mlab_quantize_unbiased(c: vec3<u32>, a: u32, z: u32) -> vec2<u32> {
+// Unbiased::quantize: faint fragments (alpha * 255 < 16 in f32) with u = ((h >> 24) + 0.5) / 256,
+// h the fragment's hash (mlab_fragment_hash); others as Paper.
+fn mlab_quantize_unbiased(c: vec3<u32>, a: u32, z: u32, h: u32) -> vec2<u32> {
     // 16.0 is 0x41800000; non-negative f32 compare as their bits.
     if (mlab_f32_mul255(a) >= 0x41800000u) {
-        return mlab_quantize_paper(c, a, z);
+        return mlab_quantize_with(c, a, z, 0x3f000000u);
     }
-    let h = mlab_mix16(c.x ^ c.y ^ c.z ^ a ^ z) >> 8u;
-    // u = (2h + 1) * 2^-9 as f32 bits (exact): n = 2h + 1 has L bits, u = n / 2^(L-1) * 2^(L-10).
-    let n = 2u * h + 1u;
+    // u = (2 t + 1) * 2^-9 as f32 bits (exact), t = h >> 24: n = 2 t + 1 has L bits,
+    // u = n / 2^(L-1) * 2^(L-10).
+    let n = 2u * (h >> 24u) + 1u;
     let l = 32u - countLeadingZeros(n);
     let u = ((117u + l) << 23u) | ((n << (24u - l)) & 0x7fffffu);
     return mlab_quantize_with(c, a, z, u);
@@ -144,30 +171,58 @@ fn mlab_div255_round(x: u32) -> u32 {
     return (y + (y >> 8u)) >> 8u;
 }
 
-// Paper::merge (Eq. 7-8, round to nearest), front nearer.
-fn mlab_merge_paper(front: vec2<u32>, back: vec2<u32>) -> vec2<u32> {
+// Paper::merge (Eq. 7-8, round to nearest), front nearer; z = z_front. `h` (the inserted
+// fragment's hash) is not read: the signature of every merge, as mlab::Arithmetic::merge.
+fn mlab_merge_paper(front: vec2<u32>, back: vec2<u32>, h: u32) -> vec2<u32> {
     let at = front.x >> 24u;
     let bt = back.x >> 24u;
-    var w = mlab_div255_round(at * bt) << 24u;
-    for (var i = 0u; i < 3u; i++) {
-        let c = min(mlab_channel(front.x, i) + mlab_div255_round(mlab_channel(back.x, i) * at), 255u);
-        w |= c << (8u * i);
-    }
-    return vec2<u32>(w, front.y);
+    // The three channels written out: no loop (lavapipe's loop limit counts every iteration).
+    let r = min(mlab_channel(front.x, 0u) + mlab_div255_round(mlab_channel(back.x, 0u) * at), 255u);
+    let g = min(mlab_channel(front.x, 1u) + mlab_div255_round(mlab_channel(back.x, 1u) * at), 255u);
+    let b = min(mlab_channel(front.x, 2u) + mlab_div255_round(mlab_channel(back.x, 2u) * at), 255u);
+    return vec2<u32>(r | (g << 8u) | (b << 16u) | (mlab_div255_round(at * bt) << 24u), front.y);
 }
 
-// Unbiased::merge: d = (mix16(all four words) * 255) >> 16, T = (Tf Tb + d) / 255,
-// C = min(255, Cf + (Cb Tf + 254 - d) / 255).
-fn mlab_merge_unbiased(front: vec2<u32>, back: vec2<u32>) -> vec2<u32> {
-    let d = (mlab_mix16(front.x ^ front.y ^ back.x ^ back.y) * 255u) >> 16u;
+// The order-preserving key of an f32's bits (arith::depth_key), as the bits of an i32: the low 31
+// bits flipped for a negative sign. Its own inverse.
+fn mlab_depth_order_key(bits: u32) -> u32 {
+    return bits ^ select(0u, 0x7fffffffu, (bits >> 31u) != 0u);
+}
+
+// The back row's weight in the depth of Unbiased's merge (arith::centroid_weight), 0..=65535:
+// p = Tf Tb, cb = 255 Tf - p, w = floor(65535 cb / (65025 - p)) for Tf >= 160, else 0.
+// 65535 cb <= 65535 * 65025 < 2^32: an exact u32 division (65025 - p = 0 only where cb = 0).
+fn mlab_centroid_weight(tf: u32, tb: u32) -> u32 {
+    let p = tf * tb;
+    let cb = 255u * tf - p;
+    let q = (65535u * cb) / max(65025u - p, 1u);
+    return select(0u, q, tf >= 160u);
+}
+
+// The depth of Unbiased's merge (arith::centroid_depth): the key of z_front moved toward z_back's
+// by floor(diff * w / 65536) if the back row is behind (signed keys), else z_front, bit for bit.
+// (diff >> 16) w + (((diff & 0xffff) w) >> 16) <= diff: no u32 product or sum overflows.
+fn mlab_centroid_depth(front: vec2<u32>, back: vec2<u32>) -> u32 {
+    let w = mlab_centroid_weight(front.x >> 24u, back.x >> 24u);
+    let kf = mlab_depth_order_key(front.y);
+    let kb = mlab_depth_order_key(back.y);
+    let diff = select(0u, kb - kf, bitcast<i32>(kb) > bitcast<i32>(kf));
+    let step = (diff >> 16u) * w + (((diff & 0xffffu) * w) >> 16u);
+    return mlab_depth_order_key(kf + step);
+}
+
+// Unbiased::merge, `h` the inserted fragment's hash: d = ((h & 0xffff) * 255) >> 16,
+// T = (Tf Tb + d) / 255, C = min(255, Cf + (Cb Tf + 254 - d) / 255), z = mlab_centroid_depth.
+fn mlab_merge_unbiased(front: vec2<u32>, back: vec2<u32>, h: u32) -> vec2<u32> {
+    let d = ((h & 0xffffu) * 255u) >> 16u;
     let at = front.x >> 24u;
     let bt = back.x >> 24u;
-    var w = ((at * bt + d) / 255u) << 24u;
-    for (var i = 0u; i < 3u; i++) {
-        let c = min(mlab_channel(front.x, i) + (mlab_channel(back.x, i) * at + 254u - d) / 255u, 255u);
-        w |= c << (8u * i);
-    }
-    return vec2<u32>(w, front.y);
+    // The three channels written out: no loop (lavapipe's loop limit counts every iteration).
+    let r = min(mlab_channel(front.x, 0u) + (mlab_channel(back.x, 0u) * at + 254u - d) / 255u, 255u);
+    let g = min(mlab_channel(front.x, 1u) + (mlab_channel(back.x, 1u) * at + 254u - d) / 255u, 255u);
+    let b = min(mlab_channel(front.x, 2u) + (mlab_channel(back.x, 2u) * at + 254u - d) / 255u, 255u);
+    let t = (at * bt + d) / 255u;
+    return vec2<u32>(r | (g << 8u) | (b << 16u) | (t << 24u), mlab_centroid_depth(front, back));
 }
 
 // A row that changes nothing (R = G = B = 0, T = 255), whatever its depth.

@@ -1,19 +1,22 @@
 // Listing 1 (Salvi & Vaidyanathan 2014) on MLAB_M rows, front to back: a one-pass bubble
 // insert (`f.z <= B[i].z`: a new fragment goes in front of rows at its depth), then the merge of
-// the last two rows (mlab_merge: the arithmetic chosen by the generated header).
-fn mlab_insert(b: ptr<function, array<vec2<u32>, MLAB_M>>, row: vec2<u32>) {
+// the last two rows (mlab_merge: the arithmetic chosen by the generated header), seeded by `h`,
+// the inserted fragment's hash (mlab_fragment_hash; mlab_row_hash for a row without its
+// fragment), as mlab::mlab::insert_hashed.
+fn mlab_insert(b: ptr<function, array<vec2<u32>, MLAB_M>>, row: vec2<u32>, h: u32) {
     var f = row;
-    for (var i = 0u; i < MLAB_M; i++) {
+    // Rows 0 .. M - 1: the swaps (M - 1 iterations, a small body: lavapipe's loop limit counts
+    // every iteration of a loop the compiler does not unroll).
+    for (var i = 0u; i + 1u < MLAB_M; i++) {
         let r = (*b)[i];
         let swap = mlab_depth_le(f.y, r.y);
-        let front = select(r, f, swap);
+        (*b)[i] = select(r, f, swap);
         f = select(f, r, swap);
-        if (i + 1u < MLAB_M) {
-            (*b)[i] = front;
-        } else {
-            (*b)[i] = mlab_merge(front, f);
-        }
     }
+    // Row M - 1: the nearer of it and the row pushed down, merged with the other behind it.
+    let r = (*b)[MLAB_M - 1u];
+    let swap = mlab_depth_le(f.y, r.y);
+    (*b)[MLAB_M - 1u] = mlab_merge(select(r, f, swap), select(f, r, swap), h);
 }
 
 // The integer RGBA8 resolve of MLAB (docs/layout.md, "Integer resolve"): every row visited

@@ -6,8 +6,9 @@
 // invocation per dispatch, two binary searches of at most 33 steps each per pixel for the offsets.
 // Bindings (group 0; each entry point uses those it names):
 //   0 uniform          SortParams
-//   1 storage, read    fragments: array<u32>, 6 words per fragment in submission order (the
-//                      layout of mlab_gpu::GpuFragment: pixel, bits of R, G, B, alpha, depth)
+//   1 storage, read    fragments: array<u32>, SORT_WORDS words per fragment in submission
+//                      order (the layout of mlab_gpu::GpuFragment: pixel first); only the
+//                      pixel is read
 //   2 storage, rw      keys: array<vec2<u32>>, `size` pairs (stored pixel of the band, index);
 //                      entries count .. size are padding (0xffffffff, 0xffffffff), sorted last
 //   3 storage, rw      offsets: array<u32>, pixels + 1 entries: pixel p's fragments are
@@ -37,6 +38,9 @@ struct SortParams {
     pad1: u32,
 }
 
+// Words per fragment (mlab_gpu::GpuFragment: pixel, R, G, B, alpha, depth, key, keyed).
+const SORT_WORDS: u32 = 8u;
+
 const SORT_PAD: vec2<u32> = vec2<u32>(0xffffffffu, 0xffffffffu);
 
 @group(0) @binding(0) var<uniform> sort_params: SortParams;
@@ -60,7 +64,7 @@ fn sort_init(@builtin(global_invocation_id) gid: vec3<u32>) {
         sort_keys[i] = SORT_PAD;
         return;
     }
-    let pixel = sort_fragments[6u * i];
+    let pixel = sort_fragments[SORT_WORDS * i];
     let stored = (pixel / sort_params.width) * sort_params.line + pixel % sort_params.width;
     sort_keys[i] = vec2<u32>(stored - sort_params.first, i);
 }

@@ -136,11 +136,27 @@ impl Rng {
         let additive = self.below(8) == 0;
         let c = |r: &mut Rng| if additive { r.value() } else { r.value() * a };
         let rgba = [c(self), c(self), c(self), a];
-        GpuFragment {
-            pixel,
-            rgba,
-            depth: self.depth(),
-        }
+        GpuFragment::new(pixel, rgba, self.depth())
+    }
+
+    /// `frags` with stable keys (`GpuFragment::with_key`) on most of them: few distinct keys
+    /// (primitive ids shared by many fragments and pixels), the extremes 0 and `u32::MAX`, a
+    /// `keyed` flag other than 1 (any value but 0 means keyed), and some left without a key (the
+    /// content key), so that one stream mixes both.
+    pub fn keyed(&mut self, frags: Vec<GpuFragment>) -> Vec<GpuFragment> {
+        frags
+            .into_iter()
+            .map(|f| match self.below(8) {
+                0 => f,
+                1 => f.with_key([0, u32::MAX, 0x8000_0000][self.below(3) as usize]),
+                2 => GpuFragment {
+                    key: self.next() as u32,
+                    keyed: 1 + self.below(u32::MAX),
+                    ..f
+                },
+                _ => f.with_key(self.below(64)),
+            })
+            .collect()
     }
 
     /// A fragment for a random pixel of `pixels`.

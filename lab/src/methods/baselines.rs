@@ -116,6 +116,43 @@ pub(super) fn over(binned: &BinnedStream) -> Image {
     })
 }
 
+/// MLAB with `m` rows of f32 (no quantization; issue 30's ceiling of the 8-byte row): Listing 1
+/// in submission order, `merge(front, back) = (A_f + A_b T_f, T_f T_b, z)` with the default
+/// arithmetic's merged depth in real numbers, `z = z_f + (z_b - z_f) w`,
+/// `w = T_f (1 - T_b) / (1 - T_f T_b)` where `T_f >= 160/255` (else `z_f`), then Eq. 5 and 6.
+pub(super) fn mlab_f32(binned: &BinnedStream, m: usize) -> Image {
+    let (frags, bg) = (&binned.stream.frags, binned.bg());
+    per_pixel(binned, |p| {
+        // (color, transmittance, depth), front to back.
+        let mut rows: Vec<([f32; 3], f32, f32)> = Vec::with_capacity(m + 1);
+        for &i in binned.bins.of(p) {
+            let f = &frags[i as usize];
+            let at = rows.iter().position(|r| f.depth <= r.2).unwrap_or(rows.len());
+            rows.insert(at, (f.color, 1.0 - f.alpha, f.depth));
+            if rows.len() > m {
+                let (cb, tb, zb) = rows.pop().expect("m + 1 rows");
+                let (cf, tf, zf) = rows.pop().expect("m >= 1");
+                let c = [cf[0] + cb[0] * tf, cf[1] + cb[1] * tf, cf[2] + cb[2] * tf];
+                let opacity = 1.0 - tf * tb;
+                let z = if tf >= 160.0 / 255.0 && opacity > 0.0 && zb > zf {
+                    zf + (zb - zf) * (tf * (1.0 - tb) / opacity)
+                } else {
+                    zf
+                };
+                rows.push((c, tf * tb, z));
+            }
+        }
+        let (mut c, mut t) = ([0.0f32; 3], 1.0f32);
+        for (rc, rt, _) in rows {
+            for k in 0..3 {
+                c[k] += rc[k] * t;
+            }
+            t *= rt;
+        }
+        (over_bg(c, t, bg), t)
+    })
+}
+
 /// UNDER front to back over the sorted fragments (seed 004): `C = C + T * c`,
 /// `T = T * (1 - a)`, rounded to half; a fragment arriving when `T < UNDER_THRESHOLD` is
 /// discarded. The background is composited last with the remaining `T`.

@@ -36,7 +36,7 @@ pub use moments::{MomentKind, MomentState, Moments};
 
 use crate::stream::{PixelBins, Stream};
 use adaptive::adaptive;
-use baselines::{bavoil_myers, meshkin, over, under, wboit};
+use baselines::{bavoil_myers, meshkin, mlab_f32, over, under, wboit};
 use reference::reference;
 
 /// A rendered image: linear RGB per pixel (not clamped; additive light may exceed 1) and the
@@ -164,6 +164,10 @@ pub enum Method {
     Mboit(Moments),
     /// K-closest layered OIT (Diligent Engine Tutorial 29) with `K` layers and a tail.
     KClosest(usize),
+    /// MLAB with `M` rows of f32 (color, transmittance, depth: 20 bytes a row, never
+    /// quantized) and the default arithmetic's merged depth: the ceiling of the 8-byte row,
+    /// what is left being the `M`-row approximation itself (issue 30).
+    MlabF32(usize),
 }
 
 impl Method {
@@ -214,6 +218,7 @@ impl Method {
             Method::Adaptive(n) => format!("AT {n}"),
             Method::Mboit(m) => m.name(),
             Method::KClosest(k) => format!("K-closest {k}"),
+            Method::MlabF32(m) => format!("MLAB {m} f32 rows"),
         }
     }
 
@@ -252,6 +257,7 @@ impl Method {
             Method::BavoilMyers => per_pixel(12),
             Method::Mboit(m) => per_pixel(m.bytes_per_pixel()),
             Method::KClosest(k) => per_pixel(4 * k + 4),
+            Method::MlabF32(m) => per_pixel(20 * m),
         }
     }
 
@@ -287,6 +293,8 @@ impl Method {
                 "K-closest needs 1 to {} layers, not {k}",
                 kclosest::KCLOSEST_MAX
             )),
+            Method::MlabF32(0) => Err("MLAB needs at least one row".into()),
+            Method::MlabF32(m) => Ok(mlab_f32(binned, m)),
         }
     }
 }
