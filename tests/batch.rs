@@ -40,7 +40,7 @@ fn push_batch<F: Framebuffer>(b: &mut SpanBatcher<'_, F>, x: u32, y: u32, item: 
 
 /// A stream of `(x, y, item)`: patches scanned line by line (as a rasterizer emits them),
 /// single random pixels, and repeats of one pixel, with depths that tie on purpose, faint
-/// fragments (the dithered quantization of [`Unbiased`]), and some rows of arbitrary bytes
+/// fragments (the dithered quantization of [`Unbiased`]), half of the fragments keyed, and some rows of arbitrary bytes
 /// (NaN depths and NaN bit patterns included) pushed as rows.
 fn stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<(u32, u32, Item)> {
     let mut out = Vec::new();
@@ -56,7 +56,13 @@ fn stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<(u32, u32, Item)> {
                 rng.unit()
             };
             let color = Vec3::new(rng.unit(), rng.unit(), rng.unit());
-            Item::Fragment(Fragment::straight(color, alpha, z).expect("valid"))
+            let f = Fragment::straight(color, alpha, z).expect("valid");
+            // Half the fragments carry a stable key (the dithers' seed, issue 30).
+            Item::Fragment(if rng.below(2) == 0 {
+                f.with_key(rng.next_u64() as u32)
+            } else {
+                f
+            })
         };
         match rng.below(3) {
             0 => {
