@@ -253,24 +253,30 @@ pub(crate) fn fragment_dither(h: u32) -> f32 {
 /// toward the back row's ([`centroid_depth`]): a front row at least this transparent.
 pub(crate) const CENTROID_MIN_T: u32 = 160;
 
-/// The weight of the back row in the depth of a merge, in `0..=65535` (`65535` = all of
-/// it): its share of the merged opacity, `65535 * cb / (af + cb)` rounded down, with
-/// `af = 255 * (255 - T_front)` and `cb = (255 - T_back) * T_front` (the opacities of the
-/// front row and of the back row seen through it, times 65025). 0 when `cb = 0` (an opaque
-/// front, an empty or transparent back) and when `T_front < 160`.
+/// The weight of the back row in the depth of a merge, in 1/65536ths (`0..=65280`): its
+/// share of the merged opacity, `cb / (af + cb)`, in 1/256ths rounded down and capped at
+/// 255/256, with `af = 255 * (255 - T_front)` and `cb = (255 - T_back) * T_front` (the
+/// opacities of the front row and of the back row seen through it, times 65025). 0 when
+/// `cb = 0` (an opaque front, an empty or transparent back) and when `T_front < 160`.
 ///
 /// ```text
 /// p  = T_front * T_back
 /// cb = 255 * T_front - p           // = (255 - T_back) * T_front
-/// w  = T_front >= 160 && cb > 0 ? floor(65535 * cb / (65025 - p)) : 0
+/// w  = T_front >= 160 ? min(floor(256 * cb / (65025 - p)), 255) * 256 : 0
 /// ```
+///
+/// (`65025 - p` is 0 only where `cb` is 0 too: divide by 1 there.) Why 1/256ths: the lanes
+/// compute `floor(256 * cb / den)` as `trunc(256 * (f32(cb) / f32(den)))`, exact with no
+/// correction step: the f32 quotient is within `2^-25` (relative) of `cb / den <= 1`, so
+/// `256 *` it is within `2^-17` of `256 * cb / den`, whose distance to the next integer
+/// below or above is 0 or at least `1 / den >= 1 / 65025 > 2^-16`.
 #[inline(always)]
 pub(crate) const fn centroid_weight(t_front: u32, t_back: u32) -> u32 {
     let p = t_front * t_back;
     let cb = 255 * t_front - p;
-    // `65025 - p` is 0 only when both are 255, where `cb` is 0 too.
-    let q = (65535 * cb) / if p == 65025 { 1 } else { 65025 - p };
-    if t_front >= CENTROID_MIN_T { q } else { 0 }
+    let q = (256 * cb) / if p == 65025 { 1 } else { 65025 - p };
+    let w = if q > 255 { 255 } else { q };
+    if t_front >= CENTROID_MIN_T { w << 8 } else { 0 }
 }
 
 /// The order-preserving key of an f32's bits, as a signed integer: `bits` for a positive
@@ -291,7 +297,7 @@ pub(crate) const fn depth_key(bits: u32) -> i32 {
 /// z  = kb > kf ? key^-1(kf + floor((kb - kf) * w / 65536)) : z_front
 /// ```
 ///
-/// (`kb - kf` as an unsigned 32-bit difference; `floor(diff * w / 65536)` is
+/// (`kb - kf` as an unsigned 32-bit difference; `w` in 1/65536ths; `floor(diff * w / 65536)` is
 /// `(diff >> 16) * w + (((diff & 0xffff) * w) >> 16)` in 32 bits.) The depth stays in
 /// `[z_front, z_back]`, so rows stay sorted; it is `z_front` bit for bit when `w = 0` (an
 /// opaque front, an empty back) or when the back row is not behind.
@@ -445,7 +451,7 @@ mod tests {
     }
 
     /// The centroid weight against its definition in 64-bit arithmetic, for every pair of
-    /// transmittance bytes: in `0..=65535`, 0 below the threshold and where the back row
+    /// transmittance bytes: in `0..=65280`, 0 below the threshold and where the back row
     /// adds no opacity.
     #[test]
     fn centroid_weight_is_the_floor_of_the_share_for_every_pair() {
@@ -456,11 +462,11 @@ mod tests {
                 let want = if tf < CENTROID_MIN_T || cb == 0 {
                     0
                 } else {
-                    65535 * cb / (af + cb)
+                    (256 * cb / (af + cb)).min(255) * 256
                 };
                 let w = centroid_weight(tf, tb);
                 assert_eq!(u64::from(w), want, "T_f {tf} T_b {tb}");
-                assert!(w <= 65535);
+                assert!(w <= 65280);
             }
         }
     }
@@ -530,12 +536,12 @@ mod tests {
                 );
             }
         }
-        // The weight is the share of opacity: a front of T 255 (no opacity) gives all but
-        // 1/65536 of the way to the back row.
-        let z = f32::from_bits(centroid_depth(Row::new([0; 3], 255, 0.0), Row::new([9; 3], 0, 1.0)));
-        assert!(z > 0.999 && z <= 1.0, "{z}");
-        // Half the opacity each: half way in key space (the keys of 1.0 and 3.0 differ by 2^23).
-        let half = centroid_weight(170, 0); // af = 255 * 85, cb = 255 * 170: 2/3 behind
-        assert_eq!(half, 65535 * 2 / 3);
+        // The weight is the share of opacity: a front of T 255 (no opacity) gives 255/256
+        // of the way to the back row (the cap), in key space: linear within a binade.
+        let z = f32::from_bits(centroid_depth(Row::new([0; 3], 255, 1.0), Row::new([9; 3], 0, 1.5)));
+        assert_eq!(z, 1.0 + 0.5 * 255.0 / 256.0);
+        // A third of the opacity in front: two thirds of the way, in 1/256ths.
+        let w = centroid_weight(170, 0); // af = 255 * 85, cb = 255 * 170: 2/3 behind
+        assert_eq!(w, (256 * 2 / 3) * 256);
     }
 }

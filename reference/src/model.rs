@@ -146,9 +146,9 @@ pub fn ref_depth_order(bits: u32) -> u64 {
 }
 
 /// The depth of the unbiased merge (`mlab::arith::centroid_depth` docs): with the back row's
-/// share of the merged opacity `w = floor(65535 * (255 - T_b) T_f / (65025 - T_f T_b))`
-/// (0 when `T_f < 160` or the share is 0), the key moved from the front's toward the
-/// back's by `floor((K_b - K_f) w / 65536)` when the back's key is larger; in u64.
+/// share of the merged opacity in 1/256ths, `w = min(floor(256 (255 - T_b) T_f / (65025 -
+/// T_f T_b)), 255)` (0 when `T_f < 160` or the share is 0), the key moved from the front's
+/// toward the back's by `floor((K_b - K_f) w / 256)` when the back's key is larger; in u64.
 pub fn ref_centroid_depth(front: Row, back: Row) -> f32 {
     let (f, b) = (front.to_bytes(), back.to_bytes());
     let (t_f, t_b) = (u64::from(f[3]), u64::from(b[3]));
@@ -156,13 +156,13 @@ pub fn ref_centroid_depth(front: Row, back: Row) -> f32 {
     let w = if t_f < 160 || cb == 0 {
         0
     } else {
-        65535 * cb / (255 * (255 - t_f) + cb)
+        (256 * cb / (255 * (255 - t_f) + cb)).min(255)
     };
     let (kf, kb) = (ref_depth_order(front.words()[1]), ref_depth_order(back.words()[1]));
     if kb <= kf {
         return front.depth();
     }
-    let k = (kf + (kb - kf) * w / 65536) as u32;
+    let k = (kf + (kb - kf) * w / 256) as u32;
     f32::from_bits(if k >> 31 == 1 { k & 0x7fff_ffff } else { !k })
 }
 
@@ -472,10 +472,10 @@ mod tests {
         assert!(m.color()[1] == 100 || m.color()[1] == 101);
         assert_eq!(ref_merge_unbiased(front, Row::EMPTY, 7), front);
         // T_front 204 (alpha 0.2) over an opaque back: the back's share of the opacity is
-        // 0.8 / (0.2 + 0.8), w = floor(65535 * 204 * 255 / (255 * 51 + 204 * 255)) = 52428,
-        // and 1.0 -> 2.0 is 2^23 keys: z = 1.0 + floor(2^23 * 52428 / 65536) / 2^23.
+        // 0.8 / (0.2 + 0.8), w = floor(256 * 204 * 255 / (255 * 51 + 204 * 255)) = 204,
+        // and 1.0 -> 2.0 is 2^23 keys: z = 1.0 + floor(2^23 * 204 / 256) / 2^23.
         let m = ref_merge_unbiased(Row::new([10, 0, 0], 204, 1.0), back, 0);
-        assert_eq!(m.depth(), 1.0 + ((8_388_608u64 * 52_428 / 65_536) as f32) / 8_388_608.0);
+        assert_eq!(m.depth(), 1.0 + ((8_388_608u64 * 204 / 256) as f32) / 8_388_608.0);
     }
 
     #[test]

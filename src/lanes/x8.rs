@@ -376,11 +376,10 @@ fn depth_keys(z: u32x8) -> u32x8 {
 /// the rows' first words (T in the high byte), `zf` and `zb` their depth bits; returns the
 /// merged depths' bits.
 ///
-/// The weight `floor(65535 * cb / den)` is estimated in f32 (`cb / den * 65535`, within
-/// `2^-7` of the quotient, so truncated it is the floor or one off) and corrected once each
-/// way by the sign of the remainder `65535 * cb - q * den` (exact in 32 bits: `q * den` from
-/// 16-bit products), so it is the integer floor on every backend. The depth step
-/// `floor(diff * w / 65536)` is two 16-bit products of the key difference's halves.
+/// The weight `floor(256 * cb / den)` is `trunc(256 * (f32(cb) / f32(den)))`, exact on every
+/// backend with IEEE division (the argument is in [`crate::arith::centroid_weight`]; the
+/// exhaustive test below checks every pair). The depth step `floor(diff * w / 65536)` is two
+/// 16-bit products of the key difference's halves.
 #[inline(always)]
 fn centroid8(front0: u32x8, back0: u32x8, zf: u32x8, zb: u32x8) -> u32x8 {
     let i = |v: u32x8| cast::<u32x8, i32x8>(v);
@@ -393,15 +392,10 @@ fn centroid8(front0: u32x8, back0: u32x8, zf: u32x8, zb: u32x8) -> u32x8 {
     let cb = (tf << 8) - tf - p; // 255 T_f - p = (255 - T_b) T_f
     let den = u32x8::splat(65025) - p;
     let den = den | (den.simd_eq(u32x8::ZERO) & u32x8::splat(1)); // 0 (and cb = 0) -> 1
-    let num = (cb << 16) - cb; // 65535 cb < 2^32
-    let est = f32x8::from_u(cb) / f32x8::from_u(den) * f32x8::splat(65535.0);
-    let q = u(est.fast_trunc_int());
-    let prod = u32s(u16s(q) * u16s(den)) | (u32s(u16s(q).mul_keep_high(u16s(den))) << 16);
-    let r = i(num - prod);
-    // q - 1 where r < 0, q + 1 where r >= den (a mask is -1).
-    let q = u(i(q) + r.simd_lt(i32x8::ZERO) - r.simd_gt(i(den) - i32x8::splat(1)));
+    let q = u((f32x8::from_u(cb) / f32x8::from_u(den) * f32x8::splat(256.0)).fast_trunc_int());
+    let q = q - (q >> 8); // 256 -> 255
     let gate = i(tf).simd_gt(i32x8::splat(crate::arith::CENTROID_MIN_T as i32 - 1));
-    let w = q & u(gate);
+    let w = (q << 8) & u(gate);
     let w2 = u16s(w | (w << 16));
     let (kf, kb) = (depth_keys(zf), depth_keys(zb));
     let diff = u(i(kb) - i(kf)) & u(i(kb).simd_gt(i(kf)));

@@ -189,14 +189,14 @@ fn mlab_depth_order_key(bits: u32) -> u32 {
     return bits ^ select(0u, 0x7fffffffu, (bits >> 31u) != 0u);
 }
 
-// The back row's weight in the depth of Unbiased's merge (arith::centroid_weight), 0..=65535:
-// p = Tf Tb, cb = 255 Tf - p, w = floor(65535 cb / (65025 - p)) for Tf >= 160, else 0.
-// 65535 cb <= 65535 * 65025 < 2^32: an exact u32 division (65025 - p = 0 only where cb = 0).
+// The back row's weight in the depth of Unbiased's merge (arith::centroid_weight), in
+// 1/65536ths: p = Tf Tb, cb = 255 Tf - p, w = min(floor(256 cb / (65025 - p)), 255) * 256 for
+// Tf >= 160, else 0. An exact u32 division (65025 - p = 0 only where cb = 0).
 fn mlab_centroid_weight(tf: u32, tb: u32) -> u32 {
     let p = tf * tb;
     let cb = 255u * tf - p;
-    let q = (65535u * cb) / max(65025u - p, 1u);
-    return select(0u, q, tf >= 160u);
+    let q = min((256u * cb) / max(65025u - p, 1u), 255u);
+    return select(0u, q << 8u, tf >= 160u);
 }
 
 // The depth of Unbiased's merge (arith::centroid_depth): the key of z_front moved toward z_back's
