@@ -209,7 +209,9 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         let fragments = slot.mask & !slot.rows;
         let first = fb.pixel_id(x, y);
         // Every lane pushed as a fragment holds a validated `Fragment`: no lane is invalid.
-        let mut q = slot.fragments.quantize_validated_at::<F::Arith>(fragments, first);
+        let mut q = slot
+            .fragments
+            .quantize_validated_at::<F::Arith>(fragments, first, F::MERGES);
         if slot.rows != 0 {
             for lane in 0..LANES {
                 if slot.rows & (1 << lane) != 0 {

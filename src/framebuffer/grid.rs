@@ -380,6 +380,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         Self: 'b;
 
     const SPAN_INSERTS_PAY: bool = L::SPANS || P::PIXEL_MAJOR_SPAN_INSERTS_PAY;
+    const MERGES: bool = P::MERGES;
 
     fn width(&self) -> u32 {
         self.dims.width

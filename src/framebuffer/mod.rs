@@ -273,6 +273,13 @@ pub trait Framebuffer {
     /// [`insert`](Self::insert) (nothing pending, the same bytes).
     const SPAN_INSERTS_PAY: bool = true;
 
+    /// Whether inserts merge rows and so read every fragment's hash
+    /// ([`insert_span_hashed`](Self::insert_span_hashed)): true unless the framebuffer holds HT
+    /// pixels, whose inserts read the hash only to quantize faint fragments. A batcher over a
+    /// framebuffer where it is false skips the hashes it does not need.
+    #[doc(hidden)]
+    const MERGES: bool = true;
+
     /// Width in pixels.
     fn width(&self) -> u32;
 
@@ -453,11 +460,7 @@ fn insert_fragments<F: Framebuffer + ?Sized>(
 ) -> SpanInsert {
     Dims::new(fb.width(), fb.height()).check_span(x, y, mask)?;
     let first = fb.pixel_id(x, y);
-    let q = if straight {
-        fragments.quantize_straight_at::<F::Arith>(mask, first)
-    } else {
-        fragments.quantize_at::<F::Arith>(mask, first)
-    };
+    let q = fragments.quantize_for_insert::<F::Arith>(mask, straight, first, F::MERGES);
     fb.insert_span_hashed(x, y, &q.rows, &q.hashes, q.valid)?;
     Ok(InvalidLanes(q.invalid))
 }

@@ -91,21 +91,43 @@ impl FragmentLanes {
     /// `first_pixel + i` (wrapping): the hashes are [`crate::Fragment::hash`] of those
     /// pixels (`y * width + x` and its neighbours in a framebuffer, which passes them).
     pub fn quantize_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, false, true, first_pixel)
+        x8::quantize::<A>(self, mask, false, true, first_pixel, true)
     }
 
     /// [`quantize_straight_with`](Self::quantize_straight_with) in pixels
     /// `first_pixel + i`, as [`quantize_at`](Self::quantize_at).
     pub fn quantize_straight_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, true, true, first_pixel)
+        x8::quantize::<A>(self, mask, true, true, first_pixel, true)
+    }
+
+    /// [`quantize_at`](Self::quantize_at) or [`quantize_straight_at`](Self::quantize_straight_at)
+    /// for a framebuffer's span insert, the hashes as [`quantize_validated_at`](Self::quantize_validated_at)
+    /// computes them.
+    #[inline]
+    pub(crate) fn quantize_for_insert<A: Arithmetic>(
+        &self,
+        mask: u8,
+        straight: bool,
+        first_pixel: u32,
+        all_hashes: bool,
+    ) -> QuantizedLanes {
+        x8::quantize::<A>(self, mask, straight, true, first_pixel, all_hashes)
     }
 
     /// [`quantize_with`](Self::quantize_with) for lanes that hold validated
     /// [`crate::Fragment`]s (premultiplied), without the checks: every lane in `mask` is
     /// valid. For lanes that would fail a check the rows are unspecified (never UB, never a
     /// panic); the span batcher only holds fragments it took as `Fragment`s.
+    ///
+    /// With `all_hashes` false (the insert does not merge: HT), `hashes` are computed only
+    /// where the quantization reads them (faint fragments of `Unbiased`) and are 0 otherwise.
     #[inline]
-    pub(crate) fn quantize_validated_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, false, false, first_pixel)
+    pub(crate) fn quantize_validated_at<A: Arithmetic>(
+        &self,
+        mask: u8,
+        first_pixel: u32,
+        all_hashes: bool,
+    ) -> QuantizedLanes {
+        x8::quantize::<A>(self, mask, false, false, first_pixel, all_hashes)
     }
 }

@@ -524,6 +524,7 @@ pub(super) fn quantize<A: Arithmetic>(
     straight: bool,
     check: bool,
     first_pixel: u32,
+    all_hashes: bool,
 ) -> QuantizedLanes {
     let zero = f32x8::ZERO;
     let one = f32x8::ONE;
@@ -553,22 +554,31 @@ pub(super) fn quantize<A: Arithmetic>(
     }
     // The hashes (`Fragment::hash`): the stable keys, or the content keys, of pixels
     // `first_pixel + lane`.
-    let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
-    let key = match f.key {
-        Some(k) => u32x8::new(k),
-        None => bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth),
+    // Without `all_hashes` (an insert that does not merge: HT) they are computed only where
+    // the quantization reads them, for faint fragments of `Unbiased`; else they are 0.
+    let hashes = || {
+        let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
+        let key = match f.key {
+            Some(k) => u32x8::new(k),
+            None => bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth),
+        };
+        let pixel = u32x8::splat(first_pixel) + u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]);
+        lowbias32_8(key ^ lowbias32_8(pixel))
     };
-    let pixel = u32x8::splat(first_pixel) + u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]);
-    let h = lowbias32_8(key ^ lowbias32_8(pixel));
     let half = f32x8::splat(0.5);
-    let u = match A::KIND {
-        Kind::Paper => half,
+    let (u, h) = match A::KIND {
+        Kind::Paper => (half, if all_hashes { hashes() } else { u32x8::ZERO }),
         // Faint fragments dithered, the others to nearest (as `Unbiased::quantize`):
         // `u = ((h >> 24) + 0.5) / 256`.
         Kind::Unbiased => {
             let faint = (alpha * f32x8::splat(255.0)).simd_lt(f32x8::splat(crate::arith::FAINT_BYTES));
-            let dither = (f32x8::from_u(h >> 24) + half) * f32x8::splat(1.0 / 256.0);
-            faint.select(dither, half)
+            if all_hashes || faint.any() {
+                let h = hashes();
+                let dither = (f32x8::from_u(h >> 24) + half) * f32x8::splat(1.0 / 256.0);
+                (faint.select(dither, half), h)
+            } else {
+                (half, u32x8::ZERO)
+            }
         }
     };
     let bytes = pre.map(|c| quantize8(c, u));
