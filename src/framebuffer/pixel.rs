@@ -440,6 +440,27 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         Self::view::<L, _>(unit, f).unwrap_or_else(|| f(&[[Row::EMPTY; LANES]; K], &[A::Tail::EMPTY; LANES]))
     }
 
+    /// Two spans at a time (`lanes::hybrid_resolve_parts2_rgba8`: the tails' dependency
+    /// chains of two spans overlap), the last odd span alone.
+    #[inline(always)]
+    fn resolve_line_rgba8<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: IntBackground) {
+        let unit = LANES * Self::ROWS;
+        let mut pairs = line.chunks_exact(2 * unit);
+        let mut outs = out.chunks_exact_mut(2);
+        for (o, u) in (&mut outs).zip(&mut pairs) {
+            let (u0, u1) = u.split_at(unit);
+            let both = Self::view::<L, _>(u0, |h0, t0| {
+                Self::view::<L, _>(u1, |h1, t1| lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg))
+            });
+            match (both.flatten(), o) {
+                (Some(r), [o0, o1]) => [*o0, *o1] = r,
+                (_, o) => o.iter_mut().zip(u.chunks_exact(unit)).for_each(|(o, u)| *o = Self::resolve_unit_rgba8::<L>(u, bg)),
+            }
+        }
+        let rest = outs.into_remainder().iter_mut().zip(pairs.remainder().chunks_exact(unit));
+        rest.for_each(|(o, u)| *o = Self::resolve_unit_rgba8::<L>(u, bg));
+    }
+
     /// The integer resolve of an empty pixel (as MLAB's: an empty tail adds nothing).
     fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
         [crate::resolve::int::rgba8(&[], background); LANES]

@@ -11,7 +11,7 @@ use crate::resolve::int;
 use crate::row::Row;
 use crate::tail::TailFormat;
 use bytemuck::cast;
-use wide::{f32x8, i16x8, i16x16, i32x8, u16x8, u32x8};
+use wide::{f32x8, i16x8, i16x16, i32x8, u16x8, u16x16, u32x8};
 
 // Every product below is a 16-bit one (issue 31: `wide` has no 32-bit lane multiply or
 // unsigned 32-bit min on SSE2, and emulated them at 228 instructions per pixel): `pmaddwd`
@@ -41,29 +41,24 @@ fn mul15(x: u32x8, y: u32x8) -> u32x8 {
 
 
 
-/// `(x * y + 32768) >> 16` per 16-bit lane for `x, y` in `0..=65535`: the high half of the
-/// product plus bit 15 of its low half (`pmulhuw`, `pmullw`).
-#[inline(always)]
-fn q16w(x: u16x8, y: u16x8) -> u16x8 {
-    x.mul_keep_high(y) + ((x * y) >> 15)
-}
 
-/// `sum_k c[k] y^k - c[0]` per 16-bit lane as the rounded Horner sum of `int` computes it
-/// (`x = c[n - 1]`, then `x = c[k] + q16(x, y)` down to `k = 1`, then `q16(x, y)`), from
-/// `y2 = 2 y` (at most 65535): `q16(x, y) = (mulhi(x, 2 y) + 1) >> 1` (`mulhi(x, 2y)` is
-/// `floor(x y / 2^15)`), and for `k >= 2` the coefficient folds in as `(mulhi + 2 c + 1) >> 1`,
-/// below 2^16 for every operand of `int::{H, EXP, PSI}` (largest 54164, `h` at `k = 2`): one
-/// multiply, one add and one shift per step.
-#[inline(always)]
-#[expect(clippy::cast_possible_truncation, reason = "coefficients below 2^15 at k >= 2, below 2^16 at k = 1")]
-fn horner_tail(c: &[u32], y2: u16x8) -> u16x8 {
-    let n = c.len();
-    let mut x = w(c[n - 1] as u16);
-    for &ck in c[2..n - 1].iter().rev() {
-        x = (x.mul_keep_high(y2) + w((2 * ck + 1) as u16)) >> 1;
-    }
-    x = ((x.mul_keep_high(y2) + w(1)) >> 1) + w(c[1] as u16);
-    (x.mul_keep_high(y2) + w(1)) >> 1
+/// `sum_k c[k] y^k - c[0]` per 16-bit lane (type `$w`) as the rounded Horner sum of `int`
+/// computes it (`x = c[n - 1]`, then `x = c[k] + q16(x, y)` down to `k = 1`, then
+/// `q16(x, y)`), from `y2 = 2 y` (at most 65535): `q16(x, y) = (mulhi(x, 2 y) + 1) >> 1`
+/// (`mulhi(x, 2y)` is `floor(x y / 2^15)`), and for `k >= 2` the coefficient folds in as
+/// `(mulhi + 2 c + 1) >> 1`, below 2^16 for every operand of `int::{H, EXP, PSI}` (largest
+/// 54164, `h` at `k = 2`): one multiply, one add and one shift per step (`pavgw`).
+macro_rules! horner_tail {
+    ($w:ty, $c:expr, $y2:expr) => {{
+        let (c, y2): (&[u32], $w) = ($c, $y2);
+        let n = c.len();
+        let mut x = <$w>::splat(c[n - 1] as u16);
+        for &ck in c[2..n - 1].iter().rev() {
+            x = (x.mul_keep_high(y2) + <$w>::splat((2 * ck + 1) as u16)) >> 1;
+        }
+        x = ((x.mul_keep_high(y2) + <$w>::splat(1)) >> 1) + <$w>::splat(c[1] as u16);
+        (x.mul_keep_high(y2) + <$w>::splat(1)) >> 1
+    }};
 }
 
 /// `e_r - EXP[0]` at `y = 32768` (`2 y` does not fit a 16-bit lane there): 25787.
@@ -97,11 +92,6 @@ fn widen_mask(x: u16x8) -> u32x8 {
     cast::<i32x8, u32x8>(i32x8::from_i16x8(cast(x)))
 }
 
-/// `a > b` per 16-bit lane, both in `0..=32767`.
-#[inline(always)]
-fn gt(a: u16x8, b: u16x8) -> u16x8 {
-    cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(a).simd_gt(cast::<u16x8, i16x8>(b)))
-}
 
 /// `min(a, b)` per 16-bit lane, both in `0..=32767`.
 #[inline(always)]
@@ -132,77 +122,127 @@ pub(super) fn tail(alpha: u32x8, count: u32x8) -> (u32x8, u32x8) {
     (t, g)
 }
 
-/// `int::tail` per lane: `T`, `g`, and `min(T, 65535)` in 16-bit lanes.
+/// The tail's inputs in 16-bit lanes (from its alpha sum and count in 32-bit lanes):
+/// `[min(m, 32767), 65535 - min(m, 65535), min(max(count, 1), 32767), min(S_a, 4095)]`,
+/// `m = (257 S_a) / max(count, 1)`, and `S_a` as f32.
 #[inline(always)]
-#[expect(
-    clippy::cast_possible_truncation,
-    reason = "the constants of `int` are below 2^16 where they are cut to 16-bit lanes"
-)]
-fn tail_parts(alpha: u32x8, count: u32x8) -> (u32x8, u32x8, u16x8) {
-    let one = f32x8::ONE;
+fn tail_inputs(alpha: u32x8, count: u32x8) -> ([u16x8; 4], f32x8) {
     let alpha_f = f32x8::from_i32x8(cast(alpha));
     // m = (257 S_a) / max(count, 1), both below 2^24.
     let m = div_f32(
         f32x8::from_i32x8(cast((alpha << 8) + alpha)),
-        f32x8::from_i32x8(cast(count)).fast_max(one),
+        f32x8::from_i32x8(cast(count)).fast_max(f32x8::ONE),
     );
-    let ms = narrow(m); // min(m, 32767)
-    let route_b = gt(ms, w(16384)); // !series
-    let mm = min15(ms, w(16384));
     // 65535 - min(m, 65535): `packssdw` of m - 32768 is min(m, 65535) - 32768 (m >= 0).
     let x = narrow(m - k(32768)) ^ w(0x7fff);
-    let n = cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(narrow(count)).max(i16x8::splat(1))); // min(n, 32767)
-    let sa = min15(narrow(alpha), w(4095));
-    // h(m) = H[0] + hd.
-    let hd = horner_tail(&int::H, mm << 1);
-    // u = (sa (65536 + 257 + hd) + 128) >> 8 = 256 (sa + hi) + ((lo + 128) >> 8), with
-    // hi, lo the halves of sa (257 + hd) (below 2^26); then u = 256 s + r', r' < 256.
-    let hq = hd + w(257);
-    let lo = sa * hq;
-    let r = ((lo >> 1) + w(64)) >> 7; // (lo + 128) >> 8, in 0..=256
-    let s = sa.mul_keep_high(hq) + sa + (r >> 8);
-    let j = s >> 7; // u >> 15
-    let ul: u16x8 = ((s & w(127)) << 8) | (r & w(255)); // u & 32767
-    let y = w(32768) - ul;
-    let uu = ul | (gt(j, w(0)) & w(32767)); // min(u, 32767)
-    let ed = ul.simd_eq(w(0)).select(w(ED_HALF), horner_tail(&int::EXP, y << 1)); // e_r - EXP[0], at most 25787
-    // zero = series ? u >= 786432 : n >= 64;  bits = zero ? 0 : (series ? j : n).
-    let zero = route_b.select(gt(n, w(63)), gt(j, w(23)));
-    let bits = route_b.select(n, j) & !zero;
-    // p = p_lo + 65536 (hi & 1): e_r (up to 65537) on route A, 1 on route B. After its
-    // first product a lane's p is below 2^16: q16(p, f) = q16(p_lo, f) + (hi & f).
-    let e0 = int::EXP[0] as u16;
-    let mut p = (w(e0) + ed) & !route_b;
-    let mut hi = route_b | gt(ed, w(u16::MAX - e0));
-    let mut b = x;
-    // Bits above the largest lane's are zero in every lane: their steps change nothing.
-    let top = bits.to_array().iter().fold(0, |a, &v| a | v);
-    let steps = (u16::BITS - top.leading_zeros()) as usize;
-    for (i, e_bit) in int::EXP_BITS.into_iter().enumerate().take(steps) {
-        let bit = w(1 << i);
-        let on = (bits & bit).simd_eq(bit);
-        // Off lanes multiply by 0 and add p back: no select on the chain through p.
-        let f = route_b.select(b, w(e_bit as u16)) & on;
-        p = p.mul_keep_high(f) + ((f & hi) + (p & !on)) + ((p * f) >> 15);
-        hi &= !on;
-        b = q16w(b, b);
-    }
-    // T = zero ? 0 : min(p, 65536): t16 = min(T, 65535), top bit `hi`.
-    let hi = hi & !zero;
-    let t16 = (p & !zero) | hi;
+    let n = cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(narrow(count)).max(i16x8::splat(1)));
+    ([narrow(m), x, n, min15(narrow(alpha), w(4095))], alpha_f)
+}
+
+/// What the 32-bit end of the tail takes from its 16-bit lanes: `[min(T, 65535), T >> 16
+/// (as a mask), h - H[0], T >> 1, ((T >> 1) psd + 16384) >> 15, the series mask]`.
+type TailMid<W> = [W; 6];
+
+/// The 16-bit part of `int::tail` (from [`tail_inputs`]) for 8 lanes (`u16x8`) or for 16
+/// (`u16x16`: two spans at once, so that their two dependency chains, about 200 cycles
+/// each, overlap).
+macro_rules! tail_mid {
+    ($name:ident, $w:ty, $i:ty) => {
+        #[inline(always)]
+        #[expect(
+            clippy::cast_possible_truncation,
+            reason = "the constants of `int` are below 2^16 where they are cut to 16-bit lanes"
+        )]
+        fn $name([ms, x, n, sa]: [$w; 4]) -> TailMid<$w> {
+            let w = |v: u16| <$w>::splat(v);
+            let gt = |a: $w, b: $w| cast::<$i, $w>(cast::<$w, $i>(a).simd_gt(cast::<$w, $i>(b)));
+            let route_b = gt(ms, w(16384)); // !series
+            let mm = cast::<$i, $w>(cast::<$w, $i>(ms).min(<$i>::splat(16384)));
+            // h(m) = H[0] + hd.
+            let hd = horner_tail!($w, &int::H, mm << 1);
+            // u = (sa (65536 + 257 + hd) + 128) >> 8 = 256 (sa + hi) + ((lo + 128) >> 8),
+            // with hi, lo the halves of sa (257 + hd) (below 2^26); then u = 256 s + r',
+            // r' < 256.
+            let hq = hd + w(257);
+            let lo = sa * hq;
+            let r = ((lo >> 1) + w(64)) >> 7; // (lo + 128) >> 8, in 0..=256
+            let s = sa.mul_keep_high(hq) + sa + (r >> 8);
+            let j = s >> 7; // u >> 15
+            let ul: $w = ((s & w(127)) << 8) | (r & w(255)); // u & 32767
+            let y = w(32768) - ul;
+            let uu = ul | (gt(j, w(0)) & w(32767)); // min(u, 32767)
+            // e_r - EXP[0], at most 25787.
+            let ed = ul.simd_eq(w(0)).select(w(ED_HALF), horner_tail!($w, &int::EXP, y << 1));
+            // zero = series ? u >= 786432 : n >= 64;  bits = zero ? 0 : (series ? j : n).
+            let zero = route_b.select(gt(n, w(63)), gt(j, w(23)));
+            let bits = route_b.select(n, j) & !zero;
+            // p = p_lo + 65536 (hi & 1): e_r (up to 65537) on route A, 1 on route B. After
+            // its first product a lane's p is below 2^16: q16(p, f) = q16(p_lo, f) + (hi & f).
+            let e0 = int::EXP[0] as u16;
+            let mut p = (w(e0) + ed) & !route_b;
+            let mut hi = route_b | gt(ed, w(u16::MAX - e0));
+            let mut b = x;
+            // Bits above the largest lane's are zero in every lane: their steps change nothing.
+            let top = bits.to_array().iter().fold(0, |a, &v| a | v);
+            let steps = (u16::BITS - top.leading_zeros()) as usize;
+            for (i, e_bit) in int::EXP_BITS.into_iter().enumerate().take(steps) {
+                let bit = w(1 << i);
+                let on = (bits & bit).simd_eq(bit);
+                // Off lanes multiply by 0 and add p back: no select on the chain through p.
+                let f = route_b.select(b, w(e_bit as u16)) & on;
+                p = p.mul_keep_high(f) + ((f & hi) + (p & !on)) + ((p * f) >> 15);
+                hi &= !on;
+                b = b.mul_keep_high(b) + ((b * b) >> 15);
+            }
+            // T = zero ? 0 : min(p, 65536): t16 = min(T, 65535), top bit `hi`.
+            let hi = hi & !zero;
+            let t16 = (p & !zero) | hi;
+            let psd = horner_tail!($w, &int::PSI, uu << 1); // psi - 65536, below 2^15
+            // phi = ((T >> 1) psi + 16384) >> 15 = 2 th + ((th psd + 16384) >> 15), th = T >> 1.
+            let th: $w = (t16 >> 1) + (hi & w(1));
+            let c = (th.mul_keep_high(psd) << 1) + ((((th * psd) >> 1) + w(8192)) >> 14);
+            [t16, hi, hd, th, c, !route_b & j.simd_eq(w(0))]
+        }
+    };
+}
+
+tail_mid!(tail_mid8, u16x8, i16x8);
+tail_mid!(tail_mid16, u16x16, i16x16);
+
+/// The 32-bit end of `int::tail`: `(T, g, min(T, 65535))`.
+#[inline(always)]
+fn tail_end([t16, hi, hd, th, c, use_series]: TailMid<u16x8>, alpha_f: f32x8) -> (u32x8, u32x8, u16x8) {
     let t = widen(t16) + (widen(hi) & k(1));
-    let psd = horner_tail(&int::PSI, uu << 1); // psi - 65536, below 2^15
-    // phi = ((T >> 1) psi + 16384) >> 15 = 2 th + ((th psd + 16384) >> 15), th = T >> 1.
-    let th: u16x8 = (t16 >> 1) + (hi & w(1));
-    let c = (th.mul_keep_high(psd) << 1) + ((((th * psd) >> 1) + w(8192)) >> 14);
     let phi = (widen(th) << 1) + widen(c);
     let l = (widen(hd) * phi + k(128)) >> 8;
     let g_series = phi + (((l << 8) - l + k(32768)) >> 16);
     let d = k(int::Q16_ONE) - t;
-    let g_div = div_f32(f32x8::from_i32x8(cast((d << 8) - d)), alpha_f.fast_max(one));
-    let use_series = widen_mask(!route_b & j.simd_eq(w(0)));
-    let g = cast::<i32x8, u32x8>(cast::<u32x8, i32x8>(use_series.select(g_series, g_div)).min(i32x8::splat(65536)));
-    (t, g, t16)
+    let g_div = div_f32(f32x8::from_i32x8(cast((d << 8) - d)), alpha_f.fast_max(f32x8::ONE));
+    let g = widen_mask(use_series).select(g_series, g_div);
+    (t, cast::<i32x8, u32x8>(cast::<u32x8, i32x8>(g).min(i32x8::splat(65536))), t16)
+}
+
+/// `int::tail` per lane: `T`, `g`, and `min(T, 65535)` in 16-bit lanes.
+#[inline(always)]
+fn tail_parts(alpha: u32x8, count: u32x8) -> (u32x8, u32x8, u16x8) {
+    let (inputs, alpha_f) = tail_inputs(alpha, count);
+    tail_end(tail_mid8(inputs), alpha_f)
+}
+
+/// [`tail_parts`] of two spans' tails at once.
+#[inline(always)]
+fn tail_parts2(alpha: [u32x8; 2], count: [u32x8; 2]) -> [(u32x8, u32x8, u16x8); 2] {
+    // (Written out: `array::map` and `from_fn` here were calls, with copies, not inlined.)
+    let (a, fa) = tail_inputs(alpha[0], count[0]);
+    let (b, fb) = tail_inputs(alpha[1], count[1]);
+    let join = |i: usize| cast::<[u16x8; 2], u16x16>([a[i], b[i]]);
+    let [m0, m1, m2, m3, m4, m5] = tail_mid16([join(0), join(1), join(2), join(3)]);
+    let split = cast::<u16x16, [u16x8; 2]>;
+    let [m0, m1, m2, m3, m4, m5] = [split(m0), split(m1), split(m2), split(m3), split(m4), split(m5)];
+    [
+        tail_end([m0[0], m1[0], m2[0], m3[0], m4[0], m5[0]], fa),
+        tail_end([m0[1], m1[1], m2[1], m3[1], m4[1], m5[1]], fb),
+    ]
 }
 
 /// `q15(x, y) = (x y + 16384) >> 15` per 16-bit lane from the doubled factors `x2 = 2 x`,
@@ -213,17 +253,12 @@ fn q15d(x2: u16x8, y2: u16x8) -> u16x8 {
     (x2.mul_keep_high(y2) + w(1)) >> 1
 }
 
-/// The integer RGBA8 resolve of 8 HT pixels (head layers, tails), over the opaque background
-/// `bg` (`int::background_channel` values) when `OPAQUE`, else premultiplied. The head runs
-/// in 16-bit lanes with doubled factors (`128 c` as `c << 8`, `floor(257 T / 2)` as
-/// `257 T & !1`, `v` as `2 v`), 8 pixels in one 128-bit register.
+/// The head of 8 HT pixels in 16-bit lanes with doubled factors (`128 c` as `c << 8`,
+/// `floor(257 T / 2)` as `257 T & !1`, `v` as `2 v`), 8 pixels in one 128-bit register:
+/// the three accumulators and `2 v`.
 #[inline(always)]
-#[expect(clippy::cast_possible_truncation, reason = "accumulator start and background below 2^15")]
-pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
-    head: &[[Row; LANES]; K],
-    tails: &[T; LANES],
-    bg: [u32; 3],
-) -> [[u8; 4]; LANES] {
+#[expect(clippy::cast_possible_truncation, reason = "accumulator start and 2 v below 2^16")]
+fn head_lanes<const K: usize>(head: &[[Row; LANES]; K]) -> ([u16x8; 3], u16x8) {
     let high = w(0xff00);
     let mut acc = [w(int::ACC_START as u16); 3];
     let mut v2 = w(2 * int::VIS_ONE as u16);
@@ -233,13 +268,30 @@ pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
         let rg = cast::<i16x8, u16x8>(i16x8::from_i32x8_truncate(words));
         let bt = cast::<i16x8, u16x8>(i16x8::from_i32x8_saturate(words >> 16));
         for (a, c) in acc.iter_mut().zip([rg << 8, rg & high, bt << 8]) {
-            *a = cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(*a).saturating_add(cast(q15d(c, v2))));
+            *a = add_sat(*a, q15d(c, v2));
         }
         let t = bt >> 8;
         v2 = q15d(((t << 8) + t) & w(0xfffe), v2) << 1;
     }
-    let (sums, alpha, count) = tail_fields(tails);
-    let (_, g, t16) = tail_parts(alpha, count);
+    (acc, v2)
+}
+
+/// `min(32767, a + b)` per 16-bit lane for `a, b` in `0..=32767` (`paddsw`).
+#[inline(always)]
+fn add_sat(a: u16x8, b: u16x8) -> u16x8 {
+    cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(a).saturating_add(cast(b)))
+}
+
+/// The tail added to the head's `(acc, 2 v)` (its color sums, `g`, `min(T, 65535)`), then the
+/// pixels over the opaque background `bg` when `OPAQUE`, else premultiplied.
+#[inline(always)]
+#[expect(clippy::cast_possible_truncation, reason = "background and visibility below 2^15")]
+fn finish<const OPAQUE: bool>(
+    (mut acc, v2): ([u16x8; 3], u16x8),
+    sums: [u32x8; 3],
+    (g, t16): (u32x8, u16x8),
+    bg: [u32; 3],
+) -> [[u8; 4]; LANES] {
     // S_c g = 4 S_c (g >> 2) + S_c (g & 3) (`pmaddwd`: 4 S_c < 2^15, g <= 65536).
     let gq = (g >> 2) | ((g & k(3)) << 16);
     let v = widen(v2 >> 1);
@@ -250,24 +302,52 @@ pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
         // saturated to 32767 by `packssdw`, then added with saturation.
         let pair = l + (l & k(!32767));
         let term = mul15(pair, v_hi) + ((mul15(pair, v) + k(16384)) >> 15);
-        *a = cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(*a).saturating_add(cast(narrow(term))));
+        *a = add_sat(*a, narrow(term));
     }
     // q16(T, v) = q16(min(T, 65535), v) for v <= 32768.
     let v2 = q15d(t16, v2) << 1;
     let [r, g, b] = if OPAQUE {
-        let bg = bg.map(|b| w(2 * b as u16));
-        core::array::from_fn(|i| cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(acc[i]).saturating_add(cast(q15d(bg[i], v2)))) >> 7)
+        let c = |i: usize| add_sat(acc[i], q15d(w(2 * bg[i] as u16), v2)) >> 7;
+        [c(0), c(1), c(2)]
     } else {
-        acc.map(|a| a >> 7)
+        [acc[0] >> 7, acc[1] >> 7, acc[2] >> 7]
     };
     let a = if OPAQUE {
-        high
+        w(0xff00)
     } else {
         let v = v2 >> 1;
         ((q15d((w(int::VIS_ONE as u16) - v) << 1, w(65280)) + w(64)) >> 7) << 8
     };
     let packed = widen(r | (g << 8)) | (widen(b | a) << 16);
     unpermute(cast::<u32x8, [u32; LANES]>(packed).map(u32::to_le_bytes))
+}
+
+/// The integer RGBA8 resolve of 8 HT pixels (head layers, tails), over the opaque background
+/// `bg` (`int::background_channel` values) when `OPAQUE`, else premultiplied.
+#[inline(always)]
+pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+    bg: [u32; 3],
+) -> [[u8; 4]; LANES] {
+    let (sums, alpha, count) = tail_fields(tails);
+    let (_, g, t16) = tail_parts(alpha, count);
+    finish::<OPAQUE>(head_lanes(head), sums, (g, t16), bg)
+}
+
+/// [`resolve`] of two spans at once (their tails' long dependency chains interleaved).
+#[inline(always)]
+pub(super) fn resolve2<T: TailFormat, const K: usize, const OPAQUE: bool>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
+    bg: [u32; 3],
+) -> [[[u8; 4]; LANES]; 2] {
+    let (s0, a0, n0) = tail_fields(spans[0].1);
+    let (s1, a1, n1) = tail_fields(spans[1].1);
+    let [(_, g0, t0), (_, g1, t1)] = tail_parts2([a0, a1], [n0, n1]);
+    [
+        finish::<OPAQUE>(head_lanes(spans[0].0), s0, (g0, t0), bg),
+        finish::<OPAQUE>(head_lanes(spans[1].0), s1, (g1, t1), bg),
+    ]
 }
 
 #[cfg(test)]
@@ -339,13 +419,22 @@ mod tests {
     #[test]
     fn tail_lanes_match_scalar_every_alpha() {
         const COUNTS: [u32; 16] = [0, 1, 2, 3, 5, 8, 13, 21, 34, 55, 63, 64, 65, 144, 2047, 65535];
-        for n in COUNTS {
+        for (i, n) in COUNTS.into_iter().enumerate() {
             for a0 in (0..65536u32).step_by(LANES) {
                 let a: [u32; 8] = core::array::from_fn(|l| a0 + l as u32);
                 let (t, g) = tail(u32x8::new(a), k(n));
                 let (t, g) = (t.to_array(), g.to_array());
                 for l in 0..8 {
                     assert_eq!((t[l], g[l]), int::tail(a[l], n), "S_a = {}, n = {n}", a[l]);
+                }
+                // Two spans at once, the second with the alpha sums reversed and another count.
+                let (b, m) = (a.map(|a| 65535 - a), COUNTS[(i + 1) % COUNTS.len()]);
+                let pair = tail_parts2([u32x8::new(a), u32x8::new(b)], [k(n), k(m)]);
+                for (((t, g, _), a), n) in pair.into_iter().zip([a, b]).zip([n, m]) {
+                    let (t, g) = (t.to_array(), g.to_array());
+                    for l in 0..8 {
+                        assert_eq!((t[l], g[l]), int::tail(a[l], n), "pair: S_a = {}, n = {n}", a[l]);
+                    }
                 }
             }
         }
@@ -369,6 +458,7 @@ mod tests {
             Background::Opaque(Vec3::new(0.2, 0.5, 1.0)),
             Background::Opaque(Vec3::ONE),
         ];
+        let mut previous: Option<([[Row; LANES]; 3], [T; LANES])> = None;
         for _ in 0..300 {
             let head: [[Row; LANES]; 3] = core::array::from_fn(|_| {
                 core::array::from_fn(|_| {
@@ -404,7 +494,21 @@ mod tests {
                         tails[l]
                     );
                 }
+                // Two spans at once: each span's bytes as alone.
+                if let Some((h0, t0)) = &previous {
+                    let spans = [(h0, t0), (&head, &tails)];
+                    let pair = match int::background(bg) {
+                        Some(b) => resolve2::<T, 3, true>(spans, b),
+                        None => resolve2::<T, 3, false>(spans, [0; 3]),
+                    };
+                    let first = match int::background(bg) {
+                        Some(b) => resolve::<T, 3, true>(h0, t0, b),
+                        None => resolve::<T, 3, false>(h0, t0, [0; 3]),
+                    };
+                    assert_eq!(pair, [first, got]);
+                }
             }
+            previous = Some((head, tails));
         }
     }
 

@@ -283,6 +283,19 @@ pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     }
 }
 
+/// [`hybrid_resolve_parts_rgba8`] of two spans at once: the same bytes, the two spans' tail
+/// dependency chains interleaved (HT's whole-line RGBA8 loop).
+#[inline(always)]
+pub(crate) fn hybrid_resolve_parts2_rgba8<T: TailFormat, const K: usize>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
+    background: IntBackground,
+) -> [[[u8; 4]; LANES]; 2] {
+    match background {
+        Some(bg) => ht_int::resolve2::<T, K, true>(spans, bg),
+        None => ht_int::resolve2::<T, K, false>(spans, [0; 3]),
+    }
+}
+
 /// [`hybrid_resolve`] on separate head layers and tails.
 #[inline]
 pub(crate) fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
