@@ -336,6 +336,15 @@ impl<const K: usize, A: Arithmetic> Ht<K, A> {
         Some(f(&head, &tails))
     }
 
+    /// Whether every tail slot of the storage of one span in the arrangement `L` is empty
+    /// (all bits zero; slots past the storage count as empty).
+    #[inline(always)]
+    fn tails_empty<L: Arrangement>(unit: &[Row]) -> bool {
+        let slot = |lane: usize| if L::SPANS { K * LANES + lane } else { lane * (K + 1) + K };
+        let word = |lane: usize| unit.get(slot(lane)).map_or(0, |r| bytemuck::cast::<Row, u64>(*r));
+        (0..LANES).fold(0, |a, lane| a | word(lane)) == 0
+    }
+
     /// Head layers and tails of a stored span.
     #[inline(always)]
     fn parts(span: &[Row]) -> Option<HtSpan<'_, K, A::Tail>> {
@@ -440,25 +449,34 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         Self::view::<L, _>(unit, f).unwrap_or_else(|| f(&[[Row::EMPTY; LANES]; K], &[A::Tail::EMPTY; LANES]))
     }
 
-    /// Two spans at a time (`lanes::hybrid_resolve_parts2_rgba8`: the tails' dependency
-    /// chains of two spans overlap), the last odd span alone.
+    /// Spans whose tails are all empty alone (their heads' resolve), the others two at a time
+    /// (`lanes::hybrid_resolve_parts2_rgba8`: the tails' dependency chains of two spans
+    /// overlap), the last odd one alone.
     #[inline(always)]
     fn resolve_line_rgba8<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: IntBackground) {
-        let unit = LANES * Self::ROWS;
-        let mut pairs = line.chunks_exact(2 * unit);
-        let mut outs = out.chunks_exact_mut(2);
-        for (o, u) in (&mut outs).zip(&mut pairs) {
-            let (u0, u1) = u.split_at(unit);
+        let mut pending: Option<(&mut [[u8; 4]; LANES], &[Row])> = None;
+        for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * Self::ROWS)) {
+            if Self::tails_empty::<L>(u) {
+                *o = Self::resolve_unit_rgba8::<L>(u, bg);
+                continue;
+            }
+            let Some((o0, u0)) = pending.take() else {
+                pending = Some((o, u));
+                continue;
+            };
             let both = Self::view::<L, _>(u0, |h0, t0| {
-                Self::view::<L, _>(u1, |h1, t1| lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg))
+                Self::view::<L, _>(u, |h1, t1| lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg))
             });
-            match (both.flatten(), o) {
-                (Some(r), [o0, o1]) => [*o0, *o1] = r,
-                (_, o) => o.iter_mut().zip(u.chunks_exact(unit)).for_each(|(o, u)| *o = Self::resolve_unit_rgba8::<L>(u, bg)),
+            if let Some([r0, r1]) = both.flatten() {
+                (*o0, *o) = (r0, r1);
+            } else {
+                *o0 = Self::resolve_unit_rgba8::<L>(u0, bg);
+                *o = Self::resolve_unit_rgba8::<L>(u, bg);
             }
         }
-        let rest = outs.into_remainder().iter_mut().zip(pairs.remainder().chunks_exact(unit));
-        rest.for_each(|(o, u)| *o = Self::resolve_unit_rgba8::<L>(u, bg));
+        if let Some((o, u)) = pending {
+            *o = Self::resolve_unit_rgba8::<L>(u, bg);
+        }
     }
 
     /// The integer resolve of an empty pixel (as MLAB's: an empty tail adds nothing).

@@ -282,16 +282,9 @@ fn add_sat(a: u16x8, b: u16x8) -> u16x8 {
     cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(a).saturating_add(cast(b)))
 }
 
-/// The tail added to the head's `(acc, 2 v)` (its color sums, `g`, `min(T, 65535)`), then the
-/// pixels over the opaque background `bg` when `OPAQUE`, else premultiplied.
+/// The tail added to the head's `(acc, 2 v)`: its color sums, `g` and `min(T, 65535)`.
 #[inline(always)]
-#[expect(clippy::cast_possible_truncation, reason = "background and visibility below 2^15")]
-fn finish<const OPAQUE: bool>(
-    (mut acc, v2): ([u16x8; 3], u16x8),
-    sums: [u32x8; 3],
-    (g, t16): (u32x8, u16x8),
-    bg: [u32; 3],
-) -> [[u8; 4]; LANES] {
+fn add_tail((mut acc, v2): ([u16x8; 3], u16x8), sums: [u32x8; 3], (g, t16): (u32x8, u16x8)) -> ([u16x8; 3], u16x8) {
     // S_c g = 4 S_c (g >> 2) + S_c (g & 3) (`pmaddwd`: 4 S_c < 2^15, g <= 65536).
     let gq = (g >> 2) | ((g & k(3)) << 16);
     let v = widen(v2 >> 1);
@@ -305,7 +298,14 @@ fn finish<const OPAQUE: bool>(
         *a = add_sat(*a, narrow(term));
     }
     // q16(T, v) = q16(min(T, 65535), v) for v <= 32768.
-    let v2 = q15d(t16, v2) << 1;
+    (acc, q15d(t16, v2) << 1)
+}
+
+/// The pixels of `(acc, 2 v)` over the opaque background `bg` when `OPAQUE`, else
+/// premultiplied.
+#[inline(always)]
+#[expect(clippy::cast_possible_truncation, reason = "background and visibility below 2^15")]
+fn pixels<const OPAQUE: bool>((acc, v2): ([u16x8; 3], u16x8), bg: [u32; 3]) -> [[u8; 4]; LANES] {
     let [r, g, b] = if OPAQUE {
         let c = |i: usize| add_sat(acc[i], q15d(w(2 * bg[i] as u16), v2)) >> 7;
         [c(0), c(1), c(2)]
@@ -322,17 +322,29 @@ fn finish<const OPAQUE: bool>(
     unpermute(cast::<u32x8, [u32; LANES]>(packed).map(u32::to_le_bytes))
 }
 
+/// Whether all 8 tails are empty (every bit zero): such tails add nothing (`T = 1`,
+/// `L = 0`), the pixels are their heads' (`docs/layout.md`).
+#[inline(always)]
+pub(super) fn tails_empty<T: TailFormat>(tails: &[T; LANES]) -> bool {
+    cast::<[T; LANES], [u64; LANES]>(*tails).iter().fold(0, |a, &t| a | t) == 0
+}
+
 /// The integer RGBA8 resolve of 8 HT pixels (head layers, tails), over the opaque background
-/// `bg` (`int::background_channel` values) when `OPAQUE`, else premultiplied.
+/// `bg` (`int::background_channel` values) when `OPAQUE`, else premultiplied; the head alone
+/// where every tail is empty.
 #[inline(always)]
 pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
     bg: [u32; 3],
 ) -> [[u8; 4]; LANES] {
+    let head = head_lanes(head);
+    if tails_empty(tails) {
+        return pixels::<OPAQUE>(head, bg);
+    }
     let (sums, alpha, count) = tail_fields(tails);
     let (_, g, t16) = tail_parts(alpha, count);
-    finish::<OPAQUE>(head_lanes(head), sums, (g, t16), bg)
+    pixels::<OPAQUE>(add_tail(head, sums, (g, t16)), bg)
 }
 
 /// [`resolve`] of two spans at once (their tails' long dependency chains interleaved).
@@ -345,8 +357,8 @@ pub(super) fn resolve2<T: TailFormat, const K: usize, const OPAQUE: bool>(
     let (s1, a1, n1) = tail_fields(spans[1].1);
     let [(_, g0, t0), (_, g1, t1)] = tail_parts2([a0, a1], [n0, n1]);
     [
-        finish::<OPAQUE>(head_lanes(spans[0].0), s0, (g0, t0), bg),
-        finish::<OPAQUE>(head_lanes(spans[1].0), s1, (g1, t1), bg),
+        pixels::<OPAQUE>(add_tail(head_lanes(spans[0].0), s0, (g0, t0)), bg),
+        pixels::<OPAQUE>(add_tail(head_lanes(spans[1].0), s1, (g1, t1)), bg),
     ]
 }
 
