@@ -11,7 +11,7 @@ use crate::resolve::int;
 use crate::row::Row;
 use crate::tail::TailFormat;
 use bytemuck::cast;
-use wide::{f32x8, i16x8, i16x16, i32x8, u16x8, u16x16, u32x8};
+use wide::{f32x8, i16x8, i16x16, i16x32, i32x8, u16x8, u16x16, u16x32, u32x8};
 
 // Every product below is a 16-bit one (issue 31: `wide` has no 32-bit lane multiply or
 // unsigned 32-bit min on SSE2, and emulated them at 228 instructions per pixel): `pmaddwd`
@@ -208,6 +208,7 @@ macro_rules! tail_mid {
 
 tail_mid!(tail_mid8, u16x8, i16x8);
 tail_mid!(tail_mid16, u16x16, i16x16);
+tail_mid!(tail_mid32, u16x32, i16x32);
 
 /// The 32-bit end of `int::tail`: `(T, g, min(T, 65535))`.
 #[inline(always)]
@@ -329,6 +330,25 @@ pub(super) fn tails_empty<T: TailFormat>(tails: &[T; LANES]) -> bool {
     cast::<[T; LANES], [u64; LANES]>(*tails).iter().fold(0, |a, &t| a | t) == 0
 }
 
+/// [`tail_parts`] of four spans' tails at once (with AVX2 two 256-bit chains).
+#[inline(always)]
+fn tail_parts4(alpha: [u32x8; 4], count: [u32x8; 4]) -> [(u32x8, u32x8, u16x8); 4] {
+    let (a, fa) = tail_inputs(alpha[0], count[0]);
+    let (b, fb) = tail_inputs(alpha[1], count[1]);
+    let (c, fc) = tail_inputs(alpha[2], count[2]);
+    let (d, fd) = tail_inputs(alpha[3], count[3]);
+    let join = |i: usize| cast::<[u16x8; 4], u16x32>([a[i], b[i], c[i], d[i]]);
+    let [m0, m1, m2, m3, m4, m5] = tail_mid32([join(0), join(1), join(2), join(3)]);
+    let split = cast::<u16x32, [u16x8; 4]>;
+    let [m0, m1, m2, m3, m4, m5] = [split(m0), split(m1), split(m2), split(m3), split(m4), split(m5)];
+    [
+        tail_end([m0[0], m1[0], m2[0], m3[0], m4[0], m5[0]], fa),
+        tail_end([m0[1], m1[1], m2[1], m3[1], m4[1], m5[1]], fb),
+        tail_end([m0[2], m1[2], m2[2], m3[2], m4[2], m5[2]], fc),
+        tail_end([m0[3], m1[3], m2[3], m3[3], m4[3], m5[3]], fd),
+    ]
+}
+
 /// The integer RGBA8 resolve of 8 HT pixels (head layers, tails), over the opaque background
 /// `bg` (`int::background_channel` values) when `OPAQUE`, else premultiplied; the head alone
 /// where every tail is empty.
@@ -345,6 +365,25 @@ pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
     let (sums, alpha, count) = tail_fields(tails);
     let (_, g, t16) = tail_parts(alpha, count);
     pixels::<OPAQUE>(add_tail(head, sums, (g, t16)), bg)
+}
+
+/// [`resolve`] of four spans at once (their tails' long dependency chains interleaved).
+#[inline(always)]
+pub(super) fn resolve4<T: TailFormat, const K: usize, const OPAQUE: bool>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
+    bg: [u32; 3],
+) -> [[[u8; 4]; LANES]; 4] {
+    let (s0, a0, n0) = tail_fields(spans[0].1);
+    let (s1, a1, n1) = tail_fields(spans[1].1);
+    let (s2, a2, n2) = tail_fields(spans[2].1);
+    let (s3, a3, n3) = tail_fields(spans[3].1);
+    let [(_, g0, t0), (_, g1, t1), (_, g2, t2), (_, g3, t3)] = tail_parts4([a0, a1, a2, a3], [n0, n1, n2, n3]);
+    [
+        pixels::<OPAQUE>(add_tail(head_lanes(spans[0].0), s0, (g0, t0)), bg),
+        pixels::<OPAQUE>(add_tail(head_lanes(spans[1].0), s1, (g1, t1)), bg),
+        pixels::<OPAQUE>(add_tail(head_lanes(spans[2].0), s2, (g2, t2)), bg),
+        pixels::<OPAQUE>(add_tail(head_lanes(spans[3].0), s3, (g3, t3)), bg),
+    ]
 }
 
 /// [`resolve`] of two spans at once (their tails' long dependency chains interleaved).
@@ -448,6 +487,14 @@ mod tests {
                         assert_eq!((t[l], g[l]), int::tail(a[l], n), "pair: S_a = {}, n = {n}", a[l]);
                     }
                 }
+                // Four: the same two, then with the counts swapped.
+                let four = tail_parts4([a, b, a, b].map(u32x8::new), [k(n), k(m), k(m), k(n)]);
+                for (((t, g, _), a), n) in four.into_iter().zip([a, b, a, b]).zip([n, m, m, n]) {
+                    let (t, g) = (t.to_array(), g.to_array());
+                    for l in 0..8 {
+                        assert_eq!((t[l], g[l]), int::tail(a[l], n), "four: S_a = {}, n = {n}", a[l]);
+                    }
+                }
             }
         }
     }
@@ -470,7 +517,9 @@ mod tests {
             Background::Opaque(Vec3::new(0.2, 0.5, 1.0)),
             Background::Opaque(Vec3::ONE),
         ];
-        let mut previous: Option<([[Row; LANES]; 3], [T; LANES])> = None;
+        // The three spans before this one (oldest first), once there are three.
+        let mut previous = [([[Row::EMPTY; LANES]; 3], [T::EMPTY; LANES]); 3];
+        let mut seen = 0;
         for _ in 0..300 {
             let head: [[Row; LANES]; 3] = core::array::from_fn(|_| {
                 core::array::from_fn(|_| {
@@ -506,21 +555,29 @@ mod tests {
                         tails[l]
                     );
                 }
-                // Two spans at once: each span's bytes as alone.
-                if let Some((h0, t0)) = &previous {
-                    let spans = [(h0, t0), (&head, &tails)];
+                // Two and four spans at once: each span's bytes as alone.
+                let alone = |(h, t): &([[Row; LANES]; 3], [T; LANES])| match int::background(bg) {
+                    Some(b) => resolve::<T, 3, true>(h, t, b),
+                    None => resolve::<T, 3, false>(h, t, [0; 3]),
+                };
+                let [(h1, t1), (h2, t2), (h3, t3)] = &previous;
+                if seen >= 3 {
+                    let spans = [(h3, t3), (&head, &tails)];
                     let pair = match int::background(bg) {
                         Some(b) => resolve2::<T, 3, true>(spans, b),
                         None => resolve2::<T, 3, false>(spans, [0; 3]),
                     };
-                    let first = match int::background(bg) {
-                        Some(b) => resolve::<T, 3, true>(h0, t0, b),
-                        None => resolve::<T, 3, false>(h0, t0, [0; 3]),
+                    assert_eq!(pair, [alone(&previous[2]), got]);
+                    let spans = [(h1, t1), (h2, t2), (h3, t3), (&head, &tails)];
+                    let four = match int::background(bg) {
+                        Some(b) => resolve4::<T, 3, true>(spans, b),
+                        None => resolve4::<T, 3, false>(spans, [0; 3]),
                     };
-                    assert_eq!(pair, [first, got]);
+                    assert_eq!(four, [alone(&previous[0]), alone(&previous[1]), pair[0], got]);
                 }
             }
-            previous = Some((head, tails));
+            previous = [previous[1], previous[2], (head, tails)];
+            seen += 1;
         }
     }
 

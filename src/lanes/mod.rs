@@ -296,6 +296,18 @@ pub(crate) fn hybrid_resolve_parts2_rgba8<T: TailFormat, const K: usize>(
     }
 }
 
+/// [`hybrid_resolve_parts_rgba8`] of four spans at once (as [`hybrid_resolve_parts2_rgba8`]).
+#[inline(always)]
+pub(crate) fn hybrid_resolve_parts4_rgba8<T: TailFormat, const K: usize>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
+    background: IntBackground,
+) -> [[[u8; 4]; LANES]; 4] {
+    match background {
+        Some(bg) => ht_int::resolve4::<T, K, true>(spans, bg),
+        None => ht_int::resolve4::<T, K, false>(spans, [0; 3]),
+    }
+}
+
 /// [`hybrid_resolve`] on separate head layers and tails.
 #[inline]
 pub(crate) fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
