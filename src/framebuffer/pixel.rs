@@ -475,7 +475,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         let mut len = 0;
         for (i, u) in line.chunks_exact(unit).enumerate() {
             if Self::tails_empty::<L>(u) {
-                put(i, None);
+                put(i, Self::view::<L, _>(u, |h, _| lanes::hybrid_resolve_head_rgba8(h, bg)));
                 continue;
             }
             if let Some(g) = group.get_mut(len) {

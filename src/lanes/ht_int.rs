@@ -246,35 +246,65 @@ fn tail_parts2(alpha: [u32x8; 2], count: [u32x8; 2]) -> [(u32x8, u32x8, u16x8); 
     ]
 }
 
-/// `q15(x, y) = (x y + 16384) >> 15` per 16-bit lane from the doubled factors `x2 = 2 x`,
-/// `y2 = 2 y` (both at most 65535): `(mulhi(x2, y2) + 1) >> 1` (`pmulhuw`, `pavgw`; the
-/// SSE2 form of the MLAB integer resolve, `docs/layout.md`).
+/// Whether `pmulhrsw` is native (SSSE3 and later): the head's factors and visibility are
+/// then kept as they are, else doubled (`q15` from `pmulhuw`: the SSE2 form of the MLAB
+/// integer resolve, `docs/layout.md`).
+const MULHRS: bool = cfg!(target_feature = "ssse3");
+
+/// A factor or visibility (at most 32767) as the head keeps it: doubled without `pmulhrsw`.
 #[inline(always)]
-fn q15d(x2: u16x8, y2: u16x8) -> u16x8 {
-    (x2.mul_keep_high(y2) + w(1)) >> 1
+fn keep(x: u16x8) -> u16x8 {
+    if MULHRS { x } else { x << 1 }
 }
 
-/// The head of 8 HT pixels in 16-bit lanes with doubled factors (`128 c` as `c << 8`,
-/// `floor(257 T / 2)` as `257 T & !1`, `v` as `2 v`), 8 pixels in one 128-bit register:
-/// the three accumulators and `2 v`.
+/// The inverse of [`keep`].
 #[inline(always)]
-#[expect(clippy::cast_possible_truncation, reason = "accumulator start and 2 v below 2^16")]
+fn unkeep(x: u16x8) -> u16x8 {
+    if MULHRS { x } else { x >> 1 }
+}
+
+/// `q15(x, y) = (x y + 16384) >> 15` per 16-bit lane from `x`, `y` as kept ([`keep`]; both at
+/// most 32767): `pmulhrsw`, or `(mulhi(2 x, 2 y) + 1) >> 1` (`pmulhuw`, `pavgw`).
+#[inline(always)]
+fn q15k(x: u16x8, y: u16x8) -> u16x8 {
+    if MULHRS {
+        cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(x).mul_scale_round(cast(y)))
+    } else {
+        (x.mul_keep_high(y) + w(1)) >> 1
+    }
+}
+
+/// `q16(t, v)` per 16-bit lane for `t <= 65535` and `v <= 32767` as kept ([`keep`]), as kept:
+/// `(mulhi(t, 2 v) + 1) >> 1`.
+#[inline(always)]
+fn q16k(t: u16x8, v: u16x8) -> u16x8 {
+    let v2 = if MULHRS { v << 1 } else { v };
+    keep((t.mul_keep_high(v2) + w(1)) >> 1)
+}
+
+/// The head of 8 HT pixels in 16-bit lanes, factors and visibility as kept ([`keep`]:
+/// `128 c`, `floor(257 T / 2)`, `v`), 8 pixels in one 128-bit register: the three
+/// accumulators and `v` as kept.
+#[inline(always)]
+#[expect(clippy::cast_possible_truncation, reason = "accumulator start and visibility below 2^15")]
 fn head_lanes<const K: usize>(head: &[[Row; LANES]; K]) -> ([u16x8; 3], u16x8) {
     let high = w(0xff00);
     let mut acc = [w(int::ACC_START as u16); 3];
-    let mut v2 = w(2 * int::VIS_ONE as u16);
+    let mut v = keep(w(int::VIS_ONE as u16));
     for layer in head {
         let words = cast::<u32x8, i32x8>(layer_words(layer));
         // [R | G << 8] and [B | T << 8] per pixel (`packssdw` of sign-extended halves).
         let rg = cast::<i16x8, u16x8>(i16x8::from_i32x8_truncate(words));
         let bt = cast::<i16x8, u16x8>(i16x8::from_i32x8_saturate(words >> 16));
+        // 256 c, halved where kept as is.
         for (a, c) in acc.iter_mut().zip([rg << 8, rg & high, bt << 8]) {
-            *a = add_sat(*a, q15d(c, v2));
+            *a = add_sat(*a, q15k(if MULHRS { c >> 1 } else { c }, v));
         }
         let t = bt >> 8;
-        v2 = q15d(((t << 8) + t) & w(0xfffe), v2) << 1;
+        let f = (t << 8) + t; // 257 T
+        v = keep(q15k(if MULHRS { f >> 1 } else { f & w(0xfffe) }, v));
     }
-    (acc, v2)
+    (acc, v)
 }
 
 /// `min(32767, a + b)` per 16-bit lane for `a, b` in `0..=32767` (`paddsw`).
@@ -283,12 +313,13 @@ fn add_sat(a: u16x8, b: u16x8) -> u16x8 {
     cast::<i16x8, u16x8>(cast::<u16x8, i16x8>(a).saturating_add(cast(b)))
 }
 
-/// The tail added to the head's `(acc, 2 v)`: its color sums, `g` and `min(T, 65535)`.
+/// The tail added to the head's `(acc, v)` (`v` as kept): its color sums, `g` and
+/// `min(T, 65535)`.
 #[inline(always)]
-fn add_tail((mut acc, v2): ([u16x8; 3], u16x8), sums: [u32x8; 3], (g, t16): (u32x8, u16x8)) -> ([u16x8; 3], u16x8) {
+fn add_tail((mut acc, vk): ([u16x8; 3], u16x8), sums: [u32x8; 3], (g, t16): (u32x8, u16x8)) -> ([u16x8; 3], u16x8) {
     // S_c g = 4 S_c (g >> 2) + S_c (g & 3) (`pmaddwd`: 4 S_c < 2^15, g <= 65536).
     let gq = (g >> 2) | ((g & k(3)) << 16);
-    let v = widen(v2 >> 1);
+    let v = widen(unkeep(vk));
     let v_hi = v << 16;
     for (a, s) in acc.iter_mut().zip(sums) {
         let l = (mul15((s << 2) | (s << 16), gq) + k(256)) >> 9;
@@ -299,16 +330,16 @@ fn add_tail((mut acc, v2): ([u16x8; 3], u16x8), sums: [u32x8; 3], (g, t16): (u32
         *a = add_sat(*a, narrow(term));
     }
     // q16(T, v) = q16(min(T, 65535), v) for v <= 32768.
-    (acc, q15d(t16, v2) << 1)
+    (acc, q16k(t16, vk))
 }
 
-/// The pixels of `(acc, 2 v)` over the opaque background `bg` when `OPAQUE`, else
+/// The pixels of `(acc, v)` (`v` as kept) over the opaque background `bg` when `OPAQUE`, else
 /// premultiplied.
 #[inline(always)]
 #[expect(clippy::cast_possible_truncation, reason = "background and visibility below 2^15")]
-fn pixels<const OPAQUE: bool>((acc, v2): ([u16x8; 3], u16x8), bg: [u32; 3]) -> [[u8; 4]; LANES] {
+fn pixels<const OPAQUE: bool>((acc, vk): ([u16x8; 3], u16x8), bg: [u32; 3]) -> [[u8; 4]; LANES] {
     let [r, g, b] = if OPAQUE {
-        let c = |i: usize| add_sat(acc[i], q15d(w(2 * bg[i] as u16), v2)) >> 7;
+        let c = |i: usize| add_sat(acc[i], q15k(keep(w(bg[i] as u16)), vk)) >> 7;
         [c(0), c(1), c(2)]
     } else {
         [acc[0] >> 7, acc[1] >> 7, acc[2] >> 7]
@@ -316,8 +347,8 @@ fn pixels<const OPAQUE: bool>((acc, v2): ([u16x8; 3], u16x8), bg: [u32; 3]) -> [
     let a = if OPAQUE {
         w(0xff00)
     } else {
-        let v = v2 >> 1;
-        ((q15d((w(int::VIS_ONE as u16) - v) << 1, w(65280)) + w(64)) >> 7) << 8
+        let opacity = keep(w(int::VIS_ONE as u16) - unkeep(vk));
+        ((q15k(opacity, keep(w(32640))) + w(64)) >> 7) << 8
     };
     let packed = widen(r | (g << 8)) | (widen(b | a) << 16);
     unpermute(cast::<u32x8, [u32; LANES]>(packed).map(u32::to_le_bytes))
@@ -365,6 +396,12 @@ pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
     let (sums, alpha, count) = tail_fields(tails);
     let (_, g, t16) = tail_parts(alpha, count);
     pixels::<OPAQUE>(add_tail(head, sums, (g, t16)), bg)
+}
+
+/// [`resolve`] of 8 HT pixels whose tails are all empty ([`tails_empty`]): their heads'.
+#[inline(always)]
+pub(super) fn resolve_head<const K: usize, const OPAQUE: bool>(head: &[[Row; LANES]; K], bg: [u32; 3]) -> [[u8; 4]; LANES] {
+    pixels::<OPAQUE>(head_lanes(head), bg)
 }
 
 /// [`resolve`] of four spans at once (their tails' long dependency chains interleaved).

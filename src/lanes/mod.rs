@@ -283,6 +283,19 @@ pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     }
 }
 
+/// [`hybrid_resolve_parts_rgba8`] of a span whose tails are all empty (every bit zero): the
+/// resolve of its head rows.
+#[inline(always)]
+pub(crate) fn hybrid_resolve_head_rgba8<const K: usize>(
+    head: &[[Row; LANES]; K],
+    background: IntBackground,
+) -> [[u8; 4]; LANES] {
+    match background {
+        Some(bg) => ht_int::resolve_head::<K, true>(head, bg),
+        None => ht_int::resolve_head::<K, false>(head, [0; 3]),
+    }
+}
+
 /// [`hybrid_resolve_parts_rgba8`] of two spans at once: the same bytes, the two spans' tail
 /// dependency chains interleaved (HT's whole-line RGBA8 loop).
 #[inline(always)]
