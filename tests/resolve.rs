@@ -299,7 +299,9 @@ fn ht_random_and_arbitrary() {
 fn ht_framebuffers_mixed_empty_tails() {
     fn run<A: mlab::Arithmetic>(rng: &mut Rng, w: u32, h: u32) {
         let spans_per_line = w.div_ceil(8);
-        let empty: Vec<bool> = (0..spans_per_line * h).map(|_| rng.next_u64() % 3 == 0).collect();
+        let empty: Vec<bool> = (0..spans_per_line * h)
+            .map(|_| rng.next_u64().is_multiple_of(3))
+            .collect();
         let pixels: Vec<([Row; 3], A::Tail)> = (0..w * h)
             .map(|i| {
                 let (x, y) = (i % w, i / w);
@@ -312,7 +314,11 @@ fn ht_framebuffers_mixed_empty_tails() {
                 };
                 let head = [row(), row(), row()];
                 let mut tail = A::Tail::EMPTY;
-                let n = if empty[(y * spans_per_line + x / 8) as usize] { 0 } else { x * 7 % 40 };
+                let n = if empty[(y * spans_per_line + x / 8) as usize] {
+                    0
+                } else {
+                    x * 7 % 40
+                };
                 for _ in 0..n {
                     tail.add(row());
                 }

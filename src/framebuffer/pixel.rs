@@ -467,7 +467,9 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         };
         let pair = |i0: usize, i1: usize| {
             Self::view::<L, _>(at(i0), |h0, t0| {
-                Self::view::<L, _>(at(i1), |h1, t1| lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg))
+                Self::view::<L, _>(at(i1), |h1, t1| {
+                    lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg)
+                })
             })
             .flatten()
         };

@@ -39,9 +39,6 @@ fn mul15(x: u32x8, y: u32x8) -> u32x8 {
     cast::<i32x8, u32x8>(cast::<u32x8, i16x16>(x).dot(cast::<u32x8, i16x16>(y)))
 }
 
-
-
-
 /// `sum_k c[k] y^k - c[0]` per 16-bit lane (type `$w`) as the rounded Horner sum of `int`
 /// computes it (`x = c[n - 1]`, then `x = c[k] + q16(x, y)` down to `k = 1`, then
 /// `q16(x, y)`), from `y2 = 2 y` (at most 65535): `q16(x, y) = (mulhi(x, 2 y) + 1) >> 1`
@@ -73,7 +70,6 @@ const ED_HALF: u16 = {
     (e - int::EXP[0]) as u16
 };
 
-
 /// 32-bit lanes in `0..=32767` to 16-bit lanes (`packssdw`; larger lanes become 32767).
 #[inline(always)]
 fn narrow(x: u32x8) -> u16x8 {
@@ -91,7 +87,6 @@ fn widen(x: u16x8) -> u32x8 {
 fn widen_mask(x: u16x8) -> u32x8 {
     cast::<i32x8, u32x8>(i32x8::from_i16x8(cast(x)))
 }
-
 
 /// `min(a, b)` per 16-bit lane, both in `0..=32767`.
 #[inline(always)]
@@ -172,7 +167,9 @@ macro_rules! tail_mid {
             let y = w(32768) - ul;
             let uu = ul | (gt(j, w(0)) & w(32767)); // min(u, 32767)
             // e_r - EXP[0], at most 25787.
-            let ed = ul.simd_eq(w(0)).select(w(ED_HALF), horner_tail!($w, &int::EXP, y << 1));
+            let ed = ul
+                .simd_eq(w(0))
+                .select(w(ED_HALF), horner_tail!($w, &int::EXP, y << 1));
             // zero = series ? u >= 786432 : n >= 64;  bits = zero ? 0 : (series ? j : n).
             let zero = route_b.select(gt(n, w(63)), gt(j, w(23)));
             let bits = route_b.select(n, j) & !zero;
@@ -220,7 +217,11 @@ fn tail_end([t16, hi, hd, th, c, use_series]: TailMid<u16x8>, alpha_f: f32x8) ->
     let d = k(int::Q16_ONE) - t;
     let g_div = div_f32(f32x8::from_i32x8(cast((d << 8) - d)), alpha_f.fast_max(f32x8::ONE));
     let g = widen_mask(use_series).select(g_series, g_div);
-    (t, cast::<i32x8, u32x8>(cast::<u32x8, i32x8>(g).min(i32x8::splat(65536))), t16)
+    (
+        t,
+        cast::<i32x8, u32x8>(cast::<u32x8, i32x8>(g).min(i32x8::splat(65536))),
+        t16,
+    )
 }
 
 /// `int::tail` per lane: `T`, `g`, and `min(T, 65535)` in 16-bit lanes.
@@ -286,7 +287,10 @@ fn q16k(t: u16x8, v: u16x8) -> u16x8 {
 /// `128 c`, `floor(257 T / 2)`, `v`), 8 pixels in one 128-bit register: the three
 /// accumulators and `v` as kept.
 #[inline(always)]
-#[expect(clippy::cast_possible_truncation, reason = "accumulator start and visibility below 2^15")]
+#[expect(
+    clippy::cast_possible_truncation,
+    reason = "accumulator start and visibility below 2^15"
+)]
 fn head_lanes<const K: usize>(head: &[[Row; LANES]; K]) -> ([u16x8; 3], u16x8) {
     let high = w(0xff00);
     let mut acc = [w(int::ACC_START as u16); 3];
@@ -400,7 +404,10 @@ pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
 
 /// [`resolve`] of 8 HT pixels whose tails are all empty ([`tails_empty`]): their heads'.
 #[inline(always)]
-pub(super) fn resolve_head<const K: usize, const OPAQUE: bool>(head: &[[Row; LANES]; K], bg: [u32; 3]) -> [[u8; 4]; LANES] {
+pub(super) fn resolve_head<const K: usize, const OPAQUE: bool>(
+    head: &[[Row; LANES]; K],
+    bg: [u32; 3],
+) -> [[u8; 4]; LANES] {
     pixels::<OPAQUE>(head_lanes(head), bg)
 }
 
@@ -556,8 +563,7 @@ mod tests {
         ];
         // The three spans before this one (oldest first), once there are three.
         let mut previous = [([[Row::EMPTY; LANES]; 3], [T::EMPTY; LANES]); 3];
-        let mut seen = 0;
-        for _ in 0..300 {
+        for seen in 0..300 {
             let head: [[Row; LANES]; 3] = core::array::from_fn(|_| {
                 core::array::from_fn(|_| {
                     let x = next();
@@ -614,7 +620,6 @@ mod tests {
                 }
             }
             previous = [previous[1], previous[2], (head, tails)];
-            seen += 1;
         }
     }
 
