@@ -48,14 +48,8 @@ fn fragment_row(rng: &mut Rng, depth: f32) -> Row {
 }
 
 fn random_stream(spans: usize) -> Vec<Step> {
-    random_stream_of(spans, 8192)
-}
-
-/// `steps` random full-span inserts (8192 in every other bench: 4 per span of 128 x 128
-/// pixels on average, so that at K = 3 about 43 % of the spans keep only empty tails).
-fn random_stream_of(spans: usize, steps: usize) -> Vec<Step> {
     let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-    (0..steps)
+    (0..8192)
         .map(|_| {
             let span = (rng.next_u64() % spans as u64) as usize;
             let rows = core::array::from_fn(|_| {
@@ -420,9 +414,10 @@ fn resolve(c: &mut Criterion) {
     });
     resolve_ht::<Unbiased>(&mut g, &stream, "");
     resolve_ht::<Paper>(&mut g, &stream, "_paper");
-    // 16 fragments per pixel on average: every span's tails hold fragments (HT's integer
-    // resolve skips spans of empty tails; this is its cost without them).
-    resolve_ht::<Unbiased>(&mut g, &random_stream_of(SPANS, 4 * 8192), "_deep");
+    // The random stream (4 full-span inserts per span on average: at K = 3 about 43 % of the
+    // spans keep only empty tails, which HT's integer resolve skips) four times over: 16 per
+    // span, every span's tails hold fragments.
+    resolve_ht::<Unbiased>(&mut g, &stream.repeat(4), "_deep");
     g.finish();
 }
 
