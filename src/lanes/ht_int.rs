@@ -123,9 +123,10 @@ pub(super) fn tail(alpha: u32x8, count: u32x8) -> (u32x8, u32x8) {
 #[inline(always)]
 fn tail_inputs(alpha: u32x8, count: u32x8) -> ([u16x8; 4], f32x8) {
     let alpha_f = f32x8::from_i32x8(cast(alpha));
-    // m = (257 S_a) / max(count, 1), both below 2^24.
+    // m = (257 S_a) / max(count, 1), both below 2^24 (257 S_a as an exact f32 product: in
+    // integers LLVM makes `(S_a << 8) + S_a` a multiply, which SSE2 emulates).
     let m = div_f32(
-        f32x8::from_i32x8(cast((alpha << 8) + alpha)),
+        alpha_f * f32x8::splat(257.0),
         f32x8::from_i32x8(cast(count)).fast_max(f32x8::ONE),
     );
     // 65535 - min(m, 65535): `packssdw` of m - 32768 is min(m, 65535) - 32768 (m >= 0).
@@ -214,8 +215,9 @@ fn tail_end([t16, hi, hd, th, c, use_series]: TailMid<u16x8>, alpha_f: f32x8) ->
     let phi = (widen(th) << 1) + widen(c);
     let l = (widen(hd) * phi + k(128)) >> 8;
     let g_series = phi + (((l << 8) - l + k(32768)) >> 16);
-    let d = k(int::Q16_ONE) - t;
-    let g_div = div_f32(f32x8::from_i32x8(cast((d << 8) - d)), alpha_f.fast_max(f32x8::ONE));
+    // (65536 - T) 255 as an exact f32 product (below 2^24).
+    let d = f32x8::from_i32x8(cast(k(int::Q16_ONE) - t)) * f32x8::splat(255.0);
+    let g_div = div_f32(d, alpha_f.fast_max(f32x8::ONE));
     let g = widen_mask(use_series).select(g_series, g_div);
     (
         t,
@@ -326,7 +328,10 @@ fn add_tail((mut acc, vk): ([u16x8; 3], u16x8), sums: [u32x8; 3], (g, t16): (u32
     let v = widen(unkeep(vk));
     let v_hi = v << 16;
     for (a, s) in acc.iter_mut().zip(sums) {
-        let l = (mul15((s << 2) | (s << 16), gq) + k(256)) >> 9;
+        // [4 S_c, S_c] per lane; `4 S_c` shifted in 16-bit lanes, or LLVM makes the pair
+        // one multiply by 65540 (emulated on SSE2, `vpmulld` on AVX2).
+        let s4 = cast::<u16x16, u32x8>(cast::<u32x8, u16x16>(s) << 2);
+        let l = (mul15(s4 | (s << 16), gq) + k(256)) >> 9;
         // l as the 16-bit pair (l & 32767, l >> 15): (l >> 15) v + q15(l & 32767, v),
         // saturated to 32767 by `packssdw`, then added with saturation.
         let pair = l + (l & k(!32767));
