@@ -290,3 +290,61 @@ fn ht_random_and_arbitrary() {
     run::<mlab::Unbiased>(&mut rng, true);
     run::<mlab::Paper>(&mut rng, true);
 }
+
+/// HT's `resolve_rgba8` through both HT framebuffers (pixel-major, spans) against the
+/// reference per pixel, on lines where whole spans have empty tails and others not (the line
+/// loop resolves the former alone and groups the latter: two or four spans at once), at widths
+/// that leave odd groups and partial spans, both tails, every background.
+#[test]
+fn ht_framebuffers_mixed_empty_tails() {
+    fn run<A: mlab::Arithmetic>(rng: &mut Rng, w: u32, h: u32) {
+        let spans_per_line = w.div_ceil(8);
+        let empty: Vec<bool> = (0..spans_per_line * h)
+            .map(|_| rng.next_u64().is_multiple_of(3))
+            .collect();
+        let pixels: Vec<([Row; 3], A::Tail)> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let mut row = || {
+                    let x = rng.next_u64();
+                    let t = (x >> 24) as u8;
+                    let cov = 255 - u32::from(t);
+                    let c = |s: u32| ((((x >> s) & 255) as u32 * cov) / 255) as u8;
+                    Row::new([c(32), c(40), c(48)], t, 1.0)
+                };
+                let head = [row(), row(), row()];
+                let mut tail = A::Tail::EMPTY;
+                let n = if empty[(y * spans_per_line + x / 8) as usize] {
+                    0
+                } else {
+                    x * 7 % 40
+                };
+                for _ in 0..n {
+                    tail.add(row());
+                }
+                (head, tail)
+            })
+            .collect();
+        let mut pm: Vec<Row> = pixels
+            .iter()
+            .flat_map(|(hd, t)| hd.iter().copied().chain([Row::from_bytes(t.to_bytes())]))
+            .collect();
+        let pm = mlab::HybridFramebuffer::<3, A>::new(&mut pm, w, h).expect("size");
+        let mut st = vec![Row::EMPTY; mlab::HybridSpanFramebuffer::<3, A>::rows_needed(w, h).expect("size")];
+        let mut sp = mlab::HybridSpanFramebuffer::<3, A>::new_cleared(&mut st, w, h).expect("size");
+        sp.copy_from(&pm).expect("same size");
+        for bg in BACKGROUNDS {
+            let want: Vec<[u8; 4]> = pixels.iter().map(|(hd, t)| resolve_int::ht_rgba8(hd, *t, bg)).collect();
+            let mut out = vec![[0u8; 4]; (w * h) as usize];
+            pm.resolve_rgba8(&mut out, bg).expect("size");
+            assert_eq!(out, want, "pixel-major, w = {w}, {bg:?}");
+            sp.resolve_rgba8(&mut out, bg).expect("size");
+            assert_eq!(out, want, "spans, w = {w}, {bg:?}");
+        }
+    }
+    let mut rng = Rng(3131);
+    for (w, h) in [(1, 3), (8, 2), (13, 3), (40, 4), (83, 5), (130, 3)] {
+        run::<mlab::Unbiased>(&mut rng, w, h);
+        run::<mlab::Paper>(&mut rng, w, h);
+    }
+}

@@ -306,6 +306,44 @@ pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     }
 }
 
+/// [`hybrid_resolve_parts_rgba8`] of a span whose tails are all empty (every bit zero): the
+/// resolve of its head rows.
+#[inline(always)]
+pub(crate) fn hybrid_resolve_head_rgba8<const K: usize>(
+    head: &[[Row; LANES]; K],
+    background: IntBackground,
+) -> [[u8; 4]; LANES] {
+    match background {
+        Some(bg) => ht_int::resolve_head::<K, true>(head, bg),
+        None => ht_int::resolve_head::<K, false>(head, [0; 3]),
+    }
+}
+
+/// [`hybrid_resolve_parts_rgba8`] of two spans at once: the same bytes, the two spans' tail
+/// dependency chains interleaved (HT's whole-line RGBA8 loop).
+#[inline(always)]
+pub(crate) fn hybrid_resolve_parts2_rgba8<T: TailFormat, const K: usize>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
+    background: IntBackground,
+) -> [[[u8; 4]; LANES]; 2] {
+    match background {
+        Some(bg) => ht_int::resolve2::<T, K, true>(spans, bg),
+        None => ht_int::resolve2::<T, K, false>(spans, [0; 3]),
+    }
+}
+
+/// [`hybrid_resolve_parts_rgba8`] of four spans at once (as [`hybrid_resolve_parts2_rgba8`]).
+#[inline(always)]
+pub(crate) fn hybrid_resolve_parts4_rgba8<T: TailFormat, const K: usize>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
+    background: IntBackground,
+) -> [[[u8; 4]; LANES]; 4] {
+    match background {
+        Some(bg) => ht_int::resolve4::<T, K, true>(spans, bg),
+        None => ht_int::resolve4::<T, K, false>(spans, [0; 3]),
+    }
+}
+
 /// [`hybrid_resolve`] on separate head layers and tails.
 #[inline]
 pub(crate) fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
