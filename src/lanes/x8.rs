@@ -89,13 +89,18 @@ macro_rules! swar {
 
         /// Turns `d` in both slots into `[255 - d, d + 1]` (G slot, T slot): `(d ^ 0xffff) + 256`
         /// is `255 - d` modulo 2^16.
+        // The unbiased merge's constants and function are unused in `x16.rs`, whose MLAB merge
+        // (tests only: MLAB runs on these 8-wide lanes) is the scalar one per lane.
+        #[allow(dead_code)]
         pub(super) const ODD_XOR: $u16 = $u16::new($crate::lanes::x8::pairs(0xffff, 0));
+        #[allow(dead_code)]
         pub(super) const ODD_ADD: $u16 = $u16::new($crate::lanes::x8::pairs(256, 1));
 
         /// The colors and transmittance of the unbiased merge ([`Unbiased`](crate::Unbiased)) for the rows of one
         /// register (the depth is the front's), with their dither `d` (one per row, in both 16-bit slots): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
         /// `d' = d` for T and `254 - d` for the colors.
         #[inline(always)]
+        #[allow(dead_code)]
         pub(super) fn merge4_unbiased(front: $u32, back: $u32, d: $u16) -> $u32 {
             let (t2, even, odd) = merge_operands(front, back);
             let inv = $u16::splat(255) - d; // (254 - d) + 1: R and B

@@ -62,6 +62,7 @@ fn framebuffer<F: Framebuffer>(fb: &mut F, frags: &[(u32, u32, Fragment)]) -> u6
         color: [[0.25; LANES], [0.5; LANES], [0.75; LANES]],
         alpha: [0.5; LANES],
         depth: [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0],
+        key: Some([11, 12, 13, 14, 15, 16, 17, 18]),
     };
     for y in 0..H {
         sum += u64::from(fb.insert_span_fragments(8, y, &lanes, 0xf3).map_or(0, |i| i.0));
@@ -129,7 +130,7 @@ fn main() {
     let rows: Vec<[Row; LANES]> = frags
         .chunks(LANES)
         .filter_map(|c| <&[_; LANES]>::try_from(c).ok())
-        .map(|c| c.map(|(_, _, f)| Unbiased::quantize(&f)))
+        .map(|c| c.map(|(_, _, f)| Unbiased::quantize(&f, f.hash(0))))
         .collect();
     let rows = black_box(&rows[..]);
     let mut sum = 0u64;
