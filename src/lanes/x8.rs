@@ -410,12 +410,11 @@ fn centroid8(front0: u32x8, back0: u32x8, zf: u32x8, zb: u32x8) -> u32x8 {
 }
 
 /// The rows' first words of 8 lanes in one register, dword `2 i` = row `i`, `2 i + 1` = row
-/// `4 + i` (no shuffle), and their depths in the same order.
+/// `4 + i` (no shuffle: [`words0`], the resolve's order), and their depths in the same order.
 #[inline(always)]
 fn pack_words<const S: bool>(r: Lanes8<S>) -> (u32x8, u32x8) {
-    let w0 = (r.a & LO) | cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.b) << 32);
     let w1 = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.a) >> 32) | (r.b & HI);
-    (w0, w1)
+    (words0(r), w1)
 }
 
 impl<const S: bool> Lanes8<S> {
@@ -567,8 +566,7 @@ pub(super) fn quantize<A: Arithmetic>(
             Some(k) => u32x8::new(k),
             None => bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth),
         };
-        let pixel = u32x8::splat(first_pixel) + u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]);
-        lowbias32_8(key ^ lowbias32_8(pixel))
+        fragment_hashes8(key, first_pixel, 1)
     };
     let half = f32x8::splat(0.5);
     let (u, h) = match A::KIND {
@@ -625,8 +623,14 @@ pub(super) fn row_hashes(rows: &[Row; LANES], first_pixel: u32, step: u32) -> [u
     let xb = b ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(b) << 32);
     let [a, b] = [xa.to_array(), xb.to_array()];
     let key = u32x8::new([a[0], a[2], a[4], a[6], b[1], b[3], b[5], b[7]]);
+    fragment_hashes8(key, first_pixel, step).to_array()
+}
+
+/// [`crate::fragment_hash`] of 8 keys in pixels `first_pixel + step * lane` (wrapping).
+#[inline(always)]
+fn fragment_hashes8(key: u32x8, first_pixel: u32, step: u32) -> u32x8 {
     let pixel = u32x8::splat(first_pixel) + u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]) * u32x8::splat(step);
-    lowbias32_8(key ^ lowbias32_8(pixel)).to_array()
+    lowbias32_8(key ^ lowbias32_8(pixel))
 }
 
 /// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`);
