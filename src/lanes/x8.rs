@@ -68,23 +68,28 @@ macro_rules! swar {
             (t2, even, odd)
         }
 
-        /// `A_front + products` bytewise, saturating; the front's T byte is replaced by the
-        /// product's T; the depth is the front's.
+        /// `A_front + products` bytewise, saturating, in every dword; the front's T byte is
+        /// replaced by the product's T.
         #[inline(always)]
-        pub(super) fn merge_result(front: $u32, pe: $u16, po: $u16) -> $u32 {
+        pub(super) fn merge_sum(front: $u32, pe: $u16, po: $u16) -> $u32 {
             let product = ::bytemuck::cast::<$u16, $u32>(pe) | (::bytemuck::cast::<$u16, $u32>(po) << 8);
             let a_front = front & $u32::splat(0x00ff_ffff);
-            let sum: $u32 =
-                ::bytemuck::cast(::bytemuck::cast::<$u32, $u8>(a_front).saturating_add(::bytemuck::cast(product)));
-            lo_hi(sum, front)
+            ::bytemuck::cast(::bytemuck::cast::<$u32, $u8>(a_front).saturating_add(::bytemuck::cast(product)))
         }
 
-        /// The paper's merge (Eq. 7-8) for the rows of one register: SWAR over 16-bit slots.
+        /// The paper's merge (Eq. 7-8) of first words, dword for dword (as
+        /// [`merge_words_unbiased`]): SWAR over 16-bit slots.
         #[inline(always)]
-        pub(super) fn merge4_paper(front: $u32, back: $u32) -> $u32 {
+        pub(super) fn merge_words_paper(front: $u32, back: $u32) -> $u32 {
             let (t2, even, odd) = merge_operands(front, back);
             // Each product <= 255 * 255: no carry out of its slot.
-            merge_result(front, div255_slots(even * t2), div255_slots(odd * t2))
+            merge_sum(front, div255_slots(even * t2), div255_slots(odd * t2))
+        }
+
+        /// The paper's merge (Eq. 7-8) for the rows of one register (the depth is the front's).
+        #[inline(always)]
+        pub(super) fn merge4_paper(front: $u32, back: $u32) -> $u32 {
+            lo_hi(merge_words_paper(front, back), front)
         }
 
         /// Turns `d` in both slots into `[255 - d, d + 1]` (G slot, T slot): `(d ^ 0xffff) + 256`
@@ -96,19 +101,22 @@ macro_rules! swar {
         #[allow(dead_code)]
         pub(super) const ODD_ADD: $u16 = $u16::new($crate::lanes::x8::pairs(256, 1));
 
-        /// The colors and transmittance of the unbiased merge ([`Unbiased`](crate::Unbiased)) for the rows of one
-        /// register (the depth is the front's), with their dither `d` (one per row, in both 16-bit slots): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
-        /// `d' = d` for T and `254 - d` for the colors.
+        /// The colors and transmittance of the unbiased merge ([`Unbiased`](crate::Unbiased)):
+        /// each dword of `front` and `back` a row's first word (color and T; 8 rows packed in
+        /// one register, or the low dwords of rows), with their dither `d` (one per dword, in
+        /// both 16-bit slots): `floor((p + d') / 255)` as `((p + d' + 1) * 257) >> 16`, with
+        /// `d' = d` for T and `254 - d` for the colors. Returns the merged first words, dword
+        /// for dword.
         #[inline(always)]
         #[allow(dead_code)]
-        pub(super) fn merge4_unbiased(front: $u32, back: $u32, d: $u16) -> $u32 {
+        pub(super) fn merge_words_unbiased(front: $u32, back: $u32, d: $u16) -> $u32 {
             let (t2, even, odd) = merge_operands(front, back);
             let inv = $u16::splat(255) - d; // (254 - d) + 1: R and B
             let odd_d = (d ^ ODD_XOR) + ODD_ADD; // G: (254 - d) + 1, T: d + 1
             // Products <= 65025, plus at most 255: no carry out of a slot.
             let pe = mul257_high(even * t2 + inv);
             let po = mul257_high(odd * t2 + odd_d);
-            merge_result(front, pe, po)
+            merge_sum(front, pe, po)
         }
 
         /// [`PaperTail`](crate::hybrid::PaperTail)`::add` for the tails of one register.
@@ -334,41 +342,32 @@ impl<const S: bool> Mask8<S> {
 }
 
 /// The merge dithers of eight lanes ([`crate::arith::merge_dither`] of each lane's hash), as
-/// the merge reads them: `d` of lane `p` in both 16-bit slots of each dword of its 64-bit
-/// lane, lanes 0-3 in `a` and 4-7 in `b`.
+/// the merge reads them: `d` of lane `p` in both 16-bit slots of dword [`POSITION`]`[p]` (the
+/// order in which [`pack_words`] packs the rows' first words).
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Dither8 {
-    a: u16x16,
-    b: u16x16,
-}
+pub(crate) struct Dither8(u16x16);
 
 impl Dither8 {
     /// From the hashes of the eight inserted fragments.
     #[inline(always)]
     pub(super) fn new(h: &[u32; LANES]) -> Dither8 {
         // `(h & 0xffff) * 255 >> 16` in the low slot of each dword (one `pmulhuw`), then in
-        // both slots.
+        // both slots, then to the packed order (one `vpermd` with AVX2).
         let lo: u16x16 = cast(u32x8::new(*h) & u32x8::splat(0xffff));
         let d: u32x8 = cast::<u16x16, u32x8>(lo.mul_keep_high(u16x16::splat(255)));
-        let both: u32x8 = d | (d << 16_u32);
-        let d: [u32; LANES] = both.to_array();
-        let spread = |i: usize| {
-            cast::<u32x8, u16x16>(u32x8::new([
-                d[i],
-                d[i],
-                d[i + 1],
-                d[i + 1],
-                d[i + 2],
-                d[i + 2],
-                d[i + 3],
-                d[i + 3],
-            ]))
-        };
-        Dither8 {
-            a: spread(0),
-            b: spread(4),
-        }
+        let d = (d | (d << 16_u32)).to_array();
+        Dither8(cast(u32x8::new([d[0], d[4], d[1], d[5], d[2], d[6], d[3], d[7]])))
     }
+}
+
+/// Whether the paper's merge packs the first words of the 8 merged rows into one register
+/// (as the unbiased merge always does): faster with AVX2, slower on SSE2 at M = 8.
+const PACK_PAPER_MERGE: bool = cfg!(target_feature = "avx2");
+
+/// Each 64-bit lane's high dword moved to its low dword.
+#[inline(always)]
+fn high(x: u32x8) -> u32x8 {
+    cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(x) >> 32)
 }
 
 /// [`crate::arith::depth_key`] of each dword: its own inverse.
@@ -394,11 +393,11 @@ fn centroid8(front0: u32x8, back0: u32x8, zf: u32x8, zb: u32x8) -> u32x8 {
     let tf = front0 >> 24;
     let tb = back0 >> 24;
     let p = u32s(u16s(tf) * u16s(tb)); // T_f * T_b < 2^16: the low slot's product
-    let cb = (tf << 8) - tf - p; // 255 T_f - p = (255 - T_b) T_f
-    let den = u32x8::splat(65025) - p;
-    let den = den | (den.simd_eq(u32x8::ZERO) & u32x8::splat(1)); // 0 (and cb = 0) -> 1
-    let q = u((f32x8::from_u(cb) / f32x8::from_u(den) * f32x8::splat(256.0)).fast_trunc_int());
-    let q = q - (q >> 8); // 256 -> 255
+    let cb = ((tf << 8) - tf - p) << 8; // 256 (255 - T_b) T_f < 2^24: exact in f32
+    // den = 65025 - p, 0 only where cb is 0 too: max(den, 1) makes that 0 / 1.
+    let den = f32x8::from_u(u32x8::splat(65025) - p).fast_max(f32x8::splat(1.0));
+    // The quotient is at most 256: capped at 255 before the truncation.
+    let q = u((f32x8::from_u(cb) / den).fast_min(f32x8::splat(255.0)).fast_trunc_int());
     let gate = i(tf).simd_gt(i32x8::splat(crate::arith::CENTROID_MIN_T as i32 - 1));
     let w = (q << 8) & u(gate);
     let w2 = u16s(w | (w << 16));
@@ -413,8 +412,7 @@ fn centroid8(front0: u32x8, back0: u32x8, zf: u32x8, zb: u32x8) -> u32x8 {
 /// `4 + i` (no shuffle: [`words0`], the resolve's order), and their depths in the same order.
 #[inline(always)]
 fn pack_words<const S: bool>(r: Lanes8<S>) -> (u32x8, u32x8) {
-    let w1 = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(r.a) >> 32) | (r.b & HI);
-    (words0(r), w1)
+    (words0(r), words1(r))
 }
 
 impl<const S: bool> Lanes8<S> {
@@ -486,19 +484,30 @@ impl<const S: bool> RowLanes for Lanes8<S> {
     #[inline(always)]
     fn merge<A: Arithmetic>(front: Self, back: Self, d: Dither8) -> Self {
         match A::KIND {
+            // All 8 merges in one register, then back to the rows' low dwords: 0.83-0.90x
+            // the time of one merge per register with AVX2, but 1.43x at M = 8 on SSE2
+            // (docs/performance.md, "The merge on one register").
+            Kind::Paper if PACK_PAPER_MERGE => {
+                let c = merge_words_paper(words0(front), words0(back));
+                Lanes8 {
+                    a: lo_hi(c, front.a),
+                    b: lo_hi(high(c), front.b),
+                }
+            }
             Kind::Paper => Lanes8 {
                 a: merge4_paper(front.a, back.a),
                 b: merge4_paper(front.b, back.b),
             },
             Kind::Unbiased => {
-                // The depths of all 8 merges in one register (`pack_words`), then back to the
-                // high dwords of their rows.
+                // All 8 merges in one register (`pack_words`): their first words and their
+                // depths, then back to the rows' low and high dwords.
                 let ((f0, zf), (b0, zb)) = (pack_words(front), pack_words(back));
                 let z = centroid8(f0, b0, zf, zb);
-                let za = cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(z) << 32);
+                let c = merge_words_unbiased(f0, b0, d.0);
+                let low = |x: u32x8| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(x) << 32);
                 Lanes8 {
-                    a: lo_hi(merge4_unbiased(front.a, back.a, d.a), za),
-                    b: lo_hi(merge4_unbiased(front.b, back.b, d.b), z),
+                    a: lo_hi(c, low(z)),
+                    b: lo_hi(high(c), z),
                 }
             }
         }
@@ -1113,7 +1122,7 @@ mod tests {
     /// channel, `floor((x * T_front + 254 - d) / 255)` for colors, `floor((T * T_front + d) /
     /// 255)` for T.
     #[test]
-    fn merge4_unbiased_is_exact_for_every_operand_triple() {
+    fn merge_words_unbiased_is_exact_for_every_operand_triple() {
         for tf in 0..256 {
             for d0 in (0..255).step_by(4) {
                 let ds: [u32; 4] = core::array::from_fn(|i| (d0 + i as u32).min(254));
@@ -1121,7 +1130,7 @@ mod tests {
                 let dv: u16x16 = cast(pack(ds.map(|d| (d | d << 16) as u64)));
                 for b in 0..256 {
                     let fr = [front(tf, b); 4];
-                    let got = unpack(merge4_unbiased(pack(fr), pack([back(b); 4]), dv));
+                    let got = unpack(lo_hi(merge_words_unbiased(pack(fr), pack([back(b); 4]), dv), pack(fr)));
                     for (i, &d) in ds.iter().enumerate() {
                         let want = merged(fr[i], back(b), |x, t| (x * t + 254 - d) / 255, |x, t| (x * t + d) / 255);
                         assert_eq!(got[i], want, "T_front {tf}, b {b}, d {d}");
