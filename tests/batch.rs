@@ -102,21 +102,7 @@ fn check<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: &mut R, ba
         push_batch(&mut batch, x, y, item);
     }
     batch.finish().expect("flush");
-    let (w, h) = (reference.width(), reference.height());
-    for y in 0..h {
-        for x in 0..w {
-            let (a, b) = (
-                reference.resolve(x, y).expect("inside"),
-                batched.resolve(x, y).expect("inside"),
-            );
-            // Bit for bit (NaN-safe): arbitrary rows may resolve to anything finite.
-            assert_eq!(
-                (a.color.to_array().map(f32::to_bits), a.transmittance.to_bits()),
-                (b.color.to_array().map(f32::to_bits), b.transmittance.to_bits()),
-                "pixel ({x}, {y})"
-            );
-        }
-    }
+    same_pixels(reference, batched);
     check_resolves(reference);
     check_resolves(batched);
 }
@@ -134,15 +120,18 @@ fn check_per_pixel<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(
         push(reference, x, y, item);
         push(other, x, y, item);
     }
-    for y in 0..reference.height() {
-        for x in 0..reference.width() {
-            let (a, b) = (
-                reference.resolve(x, y).expect("inside"),
-                other.resolve(x, y).expect("inside"),
-            );
+    same_pixels(reference, other);
+}
+
+/// Every pixel of `a` and `b` resolves bit for bit the same (NaN-safe: arbitrary rows may
+/// resolve to anything finite).
+fn same_pixels<R: Framebuffer, B: Framebuffer>(a: &R, b: &B) {
+    for y in 0..a.height() {
+        for x in 0..a.width() {
+            let (p, q) = (a.resolve(x, y).expect("inside"), b.resolve(x, y).expect("inside"));
             assert_eq!(
-                (a.color.to_array().map(f32::to_bits), a.transmittance.to_bits()),
-                (b.color.to_array().map(f32::to_bits), b.transmittance.to_bits()),
+                (p.color.to_array().map(f32::to_bits), p.transmittance.to_bits()),
+                (q.color.to_array().map(f32::to_bits), q.transmittance.to_bits()),
                 "pixel ({x}, {y})"
             );
         }

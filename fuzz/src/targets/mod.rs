@@ -10,6 +10,7 @@
 //! masks and rows of the lanes differentials, the integer resolve check of MLAB rows. The
 //! targets import it; it imports none of them.
 
+use mlab::framebuffer::Arrangement;
 use mlab::glam::Vec3;
 use mlab::lanes::LANES;
 use mlab::{Arithmetic, Background, BlendingArray, Fragment, Framebuffer, Grid, PixelMajor, Row, Spans, Unbiased};
@@ -137,6 +138,16 @@ pub(crate) fn check_int_bound(got: [u8; 4], exact: [f64; 4], bound: [f64; 4], wh
     }
 }
 
+/// The RGBA8 resolve of an 8 x 1 MLAB framebuffer of the arrangement `L` over `storage`.
+fn span_rgba8<const M: usize, L: Arrangement>(mut storage: Vec<Row>, bg: Background) -> [[u8; 4]; LANES] {
+    let mut out = [[0u8; 4]; LANES];
+    Grid::<mlab::Mlab<M>, L>::new(&mut storage, 8, 1)
+        .expect("8 x 1")
+        .resolve_rgba8(&mut out, bg)
+        .expect("8 x 1");
+    out
+}
+
 /// The integer RGBA8 resolve of MLAB rows (`SpanFramebuffer::resolve_rgba8` and
 /// `MlabFramebuffer::resolve_rgba8` of one 8-pixel span holding them in every lane) against
 /// the reference formula byte for byte, and the reference against the exact composite of
@@ -145,23 +156,16 @@ pub(crate) fn check_int_bound(got: [u8; 4], exact: [f64; 4], bound: [f64; 4], wh
 pub(crate) fn check_int_resolve<const M: usize>(rows: &[Row; M], context: &dyn core::fmt::Debug) {
     for bg in INT_BACKGROUNDS {
         let want = mlab_reference::resolve_int::rgba8(rows, bg);
-        let mut pm: Vec<Row> = (0..LANES).flat_map(|_| rows.iter().copied()).collect();
-        let mut out = [[0u8; 4]; LANES];
-        Grid::<mlab::Mlab<M>, PixelMajor>::new(&mut pm, 8, 1)
-            .expect("8 x 1")
-            .resolve_rgba8(&mut out, bg)
-            .expect("8 x 1");
+        let pm: Vec<Row> = (0..LANES).flat_map(|_| rows.iter().copied()).collect();
         assert_eq!(
-            out, [want; LANES],
+            span_rgba8::<M, PixelMajor>(pm, bg),
+            [want; LANES],
             "M = {M} pixel-major integer resolve {bg:?} of {rows:?} ({context:?})"
         );
-        let mut sp: Vec<Row> = rows.iter().flat_map(|&r| [r; LANES]).collect();
-        Grid::<mlab::Mlab<M>, Spans>::new(&mut sp, 8, 1)
-            .expect("8 x 1")
-            .resolve_rgba8(&mut out, bg)
-            .expect("8 x 1");
+        let sp: Vec<Row> = rows.iter().flat_map(|&r| [r; LANES]).collect();
         assert_eq!(
-            out, [want; LANES],
+            span_rgba8::<M, Spans>(sp, bg),
+            [want; LANES],
             "M = {M} span integer resolve {bg:?} of {rows:?} ({context:?})"
         );
         let exact = mlab_reference::resolve_int::exact(rows, bg);
