@@ -27,7 +27,7 @@
 //! (`oracle`, `oracle_order`, `oracle_with_bound(_delta)`), `fuzz/src/reference.rs`
 //! (`oracle`, `sort_front_to_back`), `lab/src/methods.rs` (`reference`'s composite),
 //! `examples/rasterizer.rs` (`composite`); the reference merge and dither of
-//! `tests/unbiased.rs`; the lanes checks of `tests/lanes.rs` and `fuzz/src/targets.rs`.
+//! `tests/unbiased.rs`; the lanes checks of `tests/lanes.rs` and `fuzz/src/targets.rs` (now `fuzz/src/targets/`).
 //! `examples/quickstart.rs` keeps its few lines so that it stands alone.
 
 pub mod kind;
