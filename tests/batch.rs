@@ -1,16 +1,18 @@
 //! The span batcher, the span inserts of every arrangement and the run-time sizes against
 //! per-pixel inserts: byte-identical framebuffers for random streams (both arithmetics,
-//! MLAB and HT, pixel-major and span arrangements), and the pixel-major lanes resolve against
-//! the scalar per-pixel resolve, bit for bit.
+//! MLAB and HT, pixel-major and span arrangements), the per-pixel inserts against the
+//! reference side of each kind (`mlab_reference::kind`), and the pixel-major lanes resolve
+//! against the scalar per-pixel resolve, bit for bit.
 
+use mlab::framebuffer::Pixel;
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::{
-    Arithmetic, Background, DynFramebuffer, Fragment, Framebuffer, FramebufferError, HybridFramebuffer,
-    HybridSpanFramebuffer, Layers, MlabFramebuffer, Paper, Row, SpanBatcher, SpanFramebuffer, Unbiased, to_rgba8,
-    to_rgba16f,
+    Background, DynFramebuffer, Fragment, Framebuffer, FramebufferError, Grid, HybridFramebuffer,
+    HybridSpanFramebuffer, Layers, MlabFramebuffer, Paper, PixelMajor, Row, SpanBatcher, SpanFramebuffer, Spans,
+    Unbiased, to_rgba8, to_rgba16f,
 };
-use mlab_reference::Rng;
+use mlab_reference::{HtKind, MlabKind, Model, RefKind, Rng};
 
 /// More iterations in release (as BLAKE3's tests do).
 const ROUNDS: usize = if cfg!(debug_assertions) { 6 } else { 40 };
@@ -100,21 +102,7 @@ fn check<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(reference: &mut R, ba
         push_batch(&mut batch, x, y, item);
     }
     batch.finish().expect("flush");
-    let (w, h) = (reference.width(), reference.height());
-    for y in 0..h {
-        for x in 0..w {
-            let (a, b) = (
-                reference.resolve(x, y).expect("inside"),
-                batched.resolve(x, y).expect("inside"),
-            );
-            // Bit for bit (NaN-safe): arbitrary rows may resolve to anything finite.
-            assert_eq!(
-                (a.color.to_array().map(f32::to_bits), a.transmittance.to_bits()),
-                (b.color.to_array().map(f32::to_bits), b.transmittance.to_bits()),
-                "pixel ({x}, {y})"
-            );
-        }
-    }
+    same_pixels(reference, batched);
     check_resolves(reference);
     check_resolves(batched);
 }
@@ -132,15 +120,18 @@ fn check_per_pixel<R: Framebuffer, B: Framebuffer<Arith = R::Arith>>(
         push(reference, x, y, item);
         push(other, x, y, item);
     }
-    for y in 0..reference.height() {
-        for x in 0..reference.width() {
-            let (a, b) = (
-                reference.resolve(x, y).expect("inside"),
-                other.resolve(x, y).expect("inside"),
-            );
+    same_pixels(reference, other);
+}
+
+/// Every pixel of `a` and `b` resolves bit for bit the same (NaN-safe: arbitrary rows may
+/// resolve to anything finite).
+fn same_pixels<R: Framebuffer, B: Framebuffer>(a: &R, b: &B) {
+    for y in 0..a.height() {
+        for x in 0..a.width() {
+            let (p, q) = (a.resolve(x, y).expect("inside"), b.resolve(x, y).expect("inside"));
             assert_eq!(
-                (a.color.to_array().map(f32::to_bits), a.transmittance.to_bits()),
-                (b.color.to_array().map(f32::to_bits), b.transmittance.to_bits()),
+                (p.color.to_array().map(f32::to_bits), p.transmittance.to_bits()),
+                (q.color.to_array().map(f32::to_bits), q.transmittance.to_bits()),
                 "pixel ({x}, {y})"
             );
         }
@@ -184,53 +175,72 @@ fn check_resolves<F: Framebuffer>(fb: &F) {
     }
 }
 
-fn run<A: Arithmetic>() {
+/// The storage of a pixel-major framebuffer after the stream `s`, pixel by pixel against the
+/// reference side of its kind (`mlab_reference::kind`): the reference quantization and
+/// Listing 1 or 2 of every item, from an empty pixel.
+fn check_reference<K: RefKind>(storage: &[Row], w: u32, s: &[(u32, u32, Item)]) {
+    let mut model = vec![Row::EMPTY; storage.len()];
+    model.chunks_exact_mut(K::SLOTS).for_each(K::cleared);
+    for &(x, y, item) in s {
+        let p = y * w + x;
+        let slots = &mut model[p as usize * K::SLOTS..][..K::SLOTS];
+        match item {
+            Item::Fragment(f) => K::ref_insert_fragment(slots, &f, p),
+            Item::Row(r) => K::ref_insert_row(slots, r, p),
+        }
+    }
+    for (p, (got, want)) in storage
+        .chunks_exact(K::SLOTS)
+        .zip(model.chunks_exact(K::SLOTS))
+        .enumerate()
+    {
+        assert_eq!(
+            got,
+            want,
+            "pixel ({}, {}): the per-pixel inserts against the reference",
+            p as u32 % w,
+            p as u32 / w
+        );
+    }
+}
+
+/// One kind in both arrangements: the batcher into the span framebuffer and into a second
+/// pixel-major one against per-pixel inserts (see [`check`]), both pixel-major storages
+/// byte-identical, the span framebuffer's per-pixel inserts against the pixel-major ones', and
+/// the storage against the reference ([`check_reference`]).
+fn run_kind<K: RefKind>(w: u32, h: u32, s: &[(u32, u32, Item)]) {
+    let rows = Grid::<K::P, PixelMajor>::rows_needed(w, h).expect("size");
+    let mut a = vec![Row::EMPTY; rows];
+    let mut b = vec![Row::EMPTY; Grid::<K::P, Spans>::rows_needed(w, h).expect("size")];
+    let mut c = vec![Row::EMPTY; rows];
+    let mut reference = Grid::<K::P, PixelMajor>::new(&mut a, w, h).expect("size");
+    check(
+        &mut reference,
+        &mut Grid::<K::P, Spans>::new(&mut b, w, h).expect("size"),
+        s,
+    );
+    check(
+        &mut reference,
+        &mut Grid::<K::P, PixelMajor>::new(&mut c, w, h).expect("size"),
+        s,
+    );
+    assert_eq!(a, c, "pixel-major span inserts, {:?}", K::P::LAYERS);
+    check_per_pixel(
+        &mut Grid::<K::P, PixelMajor>::new(&mut a, w, h).expect("size"),
+        &mut Grid::<K::P, Spans>::new(&mut b, w, h).expect("size"),
+        s,
+    );
+    check_reference::<K>(&a, w, s);
+}
+
+fn run<A: Model>() {
     let mut rng = Rng(0x1234_5678_9abc_def1 ^ A::NAME.len() as u64);
     for round in 0..ROUNDS {
         // Widths that are and are not multiples of 8, and that exceed the batcher's window.
         let (w, h) = [(8, 1), (13, 5), (67, 11), (130, 17), (3, 40)][round % 5];
         let s = stream(&mut rng, w, h, 200 + 300 * (round % 4));
-        let mut a = vec![Row::EMPTY; (w * h * 4) as usize];
-        let mut b = vec![Row::EMPTY; SpanFramebuffer::<4>::rows_needed(w, h).expect("size")];
-        let mut c = vec![Row::EMPTY; (w * h * 4) as usize];
-        let mut reference = MlabFramebuffer::<4, A>::new(&mut a, w, h).expect("size");
-        check(
-            &mut reference,
-            &mut SpanFramebuffer::<4, A>::new(&mut b, w, h).expect("size"),
-            &s,
-        );
-        check(
-            &mut reference,
-            &mut MlabFramebuffer::<4, A>::new(&mut c, w, h).expect("size"),
-            &s,
-        );
-        assert_eq!(a, c, "pixel-major span inserts");
-        check_per_pixel(
-            &mut MlabFramebuffer::<4, A>::new(&mut a, w, h).expect("size"),
-            &mut SpanFramebuffer::<4, A>::new(&mut b, w, h).expect("size"),
-            &s,
-        );
-
-        let mut a = vec![Row::EMPTY; (w * h * 3) as usize];
-        let mut b = vec![Row::EMPTY; HybridSpanFramebuffer::<2>::rows_needed(w, h).expect("size")];
-        let mut c = vec![Row::EMPTY; (w * h * 3) as usize];
-        let mut reference = HybridFramebuffer::<2, A>::new(&mut a, w, h).expect("size");
-        check(
-            &mut reference,
-            &mut HybridSpanFramebuffer::<2, A>::new(&mut b, w, h).expect("size"),
-            &s,
-        );
-        check(
-            &mut reference,
-            &mut HybridFramebuffer::<2, A>::new(&mut c, w, h).expect("size"),
-            &s,
-        );
-        assert_eq!(a, c, "pixel-major HT span inserts");
-        check_per_pixel(
-            &mut HybridFramebuffer::<2, A>::new(&mut a, w, h).expect("size"),
-            &mut HybridSpanFramebuffer::<2, A>::new(&mut b, w, h).expect("size"),
-            &s,
-        );
+        run_kind::<MlabKind<4, A>>(w, h, &s);
+        run_kind::<HtKind<2, A>>(w, h, &s);
 
         // M = 1 and K = 1 too (the smallest arrays merge on every second fragment).
         let mut a = vec![Row::EMPTY; (w * h) as usize];
@@ -241,6 +251,7 @@ fn run<A: Arithmetic>() {
             &s,
         );
         assert_eq!(a, b);
+        check_reference::<MlabKind<1, A>>(&a, w, &s);
     }
 }
 

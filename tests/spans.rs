@@ -11,8 +11,9 @@ use mlab::half::f16;
 use mlab::lanes::{FragmentLanes, LANES};
 use mlab::{
     Background, FramebufferError, Grid, Ht, HybridFramebuffer, HybridSpanFramebuffer, Mlab, PixelMajor, Row,
-    SpanFramebuffer, Spans,
+    SpanFramebuffer, Spans, Unbiased,
 };
+use mlab_reference::{HtKind, MlabKind, RefKind};
 use proptest::prelude::*;
 
 const BG: Background = Background::Opaque(Vec3::new(0.1, 0.2, 0.3));
@@ -38,14 +39,30 @@ fn ops(width: u32, height: u32) -> impl Strategy<Value = Vec<Op>> {
     })
 }
 
+/// The pixels after `ops` by the reference side of the kind (`mlab_reference::kind`): each
+/// on lane's row inserted by Listing 1 or 2 into the slots of its pixel, from empty pixels.
+fn reference_pixels<K: RefKind>(w: u32, h: u32, ops: &[Op]) -> Vec<Row> {
+    let mut model = vec![Row::EMPTY; (w * h) as usize * K::SLOTS];
+    model.chunks_exact_mut(K::SLOTS).for_each(K::cleared);
+    for &(x, y, rows, mask) in ops {
+        for (l, row) in rows.iter().enumerate().filter(|&(l, _)| mask & (1 << l) != 0) {
+            let p = y * w + x + l as u32;
+            K::ref_insert_row(&mut model[p as usize * K::SLOTS..][..K::SLOTS], *row, p);
+        }
+    }
+    model
+}
+
 /// One check for every kind of pixel: span inserts into a span grid against pixel inserts
-/// into a pixel-major grid (scalar), pixel for pixel, byte for byte after conversion, padding
-/// lanes as cleared, every resolve bit for bit, and the round trip back into spans.
-fn check<P: Pixel>(w: u32, h: u32, ops: &[Op]) -> Result<(), TestCaseError> {
-    let mut span_storage = vec![Row::EMPTY; Grid::<P, Spans>::rows_needed(w, h).unwrap()];
-    let mut fb = Grid::<P, Spans>::new_cleared(&mut span_storage, w, h).unwrap();
-    let mut px_storage = vec![Row::EMPTY; Grid::<P, PixelMajor>::rows_needed(w, h).unwrap()];
-    let mut reference = Grid::<P, PixelMajor>::new_cleared(&mut px_storage, w, h).unwrap();
+/// into a pixel-major grid (scalar) and against the reference side of the kind, pixel for
+/// pixel, byte for byte after conversion, padding lanes as cleared, every resolve bit for bit
+/// (RGBA8 also against the reference integer resolve), and the round trip back into spans.
+fn check<K: RefKind>(w: u32, h: u32, ops: &[Op]) -> Result<(), TestCaseError> {
+    type P<K> = <K as RefKind>::P;
+    let mut span_storage = vec![Row::EMPTY; Grid::<P<K>, Spans>::rows_needed(w, h).unwrap()];
+    let mut fb = Grid::<P<K>, Spans>::new_cleared(&mut span_storage, w, h).unwrap();
+    let mut px_storage = vec![Row::EMPTY; Grid::<P<K>, PixelMajor>::rows_needed(w, h).unwrap()];
+    let mut reference = Grid::<P<K>, PixelMajor>::new_cleared(&mut px_storage, w, h).unwrap();
     for &(x, y, rows, mask) in ops {
         fb.insert_span(x, y, &rows, mask).unwrap();
         for (l, row) in rows.iter().enumerate() {
@@ -54,26 +71,42 @@ fn check<P: Pixel>(w: u32, h: u32, ops: &[Op]) -> Result<(), TestCaseError> {
             }
         }
     }
+    let model = reference_pixels::<K>(w, h, ops);
+    let slots = |x: u32, y: u32| &model[(y * w + x) as usize * K::SLOTS..][..K::SLOTS];
     for y in 0..h {
         for x in 0..w {
             prop_assert_eq!(
                 fb.pixel(x, y).unwrap(),
                 reference.pixel(x, y).unwrap(),
                 "{:?} ({}, {})",
-                P::LAYERS,
+                P::<K>::LAYERS,
+                x,
+                y
+            );
+            prop_assert_eq!(
+                K::slots(fb.pixel(x, y).unwrap()),
+                slots(x, y),
+                "reference ({}, {})",
                 x,
                 y
             );
         }
     }
     let mut converted = vec![Row::EMPTY; reference.as_rows().len()];
-    let mut conv = Grid::<P, PixelMajor>::new(&mut converted, w, h).unwrap();
+    let mut conv = Grid::<P<K>, PixelMajor>::new(&mut converted, w, h).unwrap();
     conv.copy_from(&fb).unwrap();
-    prop_assert_eq!(conv.as_rows(), reference.as_rows(), "w={} h={} {:?}", w, h, P::LAYERS);
+    prop_assert_eq!(
+        conv.as_rows(),
+        reference.as_rows(),
+        "w={} h={} {:?}",
+        w,
+        h,
+        P::<K>::LAYERS
+    );
     // Padding lanes stay as cleared.
-    let mut blank_storage = span_storage_clone_len::<P>(w, h);
-    let blank = Grid::<P, Spans>::new_cleared(&mut blank_storage, w, h).unwrap();
-    let r = P::ROWS;
+    let mut blank_storage = span_storage_clone_len::<P<K>>(w, h);
+    let blank = Grid::<P<K>, Spans>::new_cleared(&mut blank_storage, w, h).unwrap();
+    let r = K::SLOTS;
     for y in 0..h {
         for x in w..w.div_ceil(8) * 8 {
             let i = ((y as usize * w.div_ceil(8) as usize + x as usize / 8) * r) * 8 + x as usize % 8;
@@ -88,6 +121,9 @@ fn check<P: Pixel>(w: u32, h: u32, ops: &[Op]) -> Result<(), TestCaseError> {
     fb.resolve_rgba8(&mut a, BG).unwrap();
     reference.resolve_rgba8(&mut b, BG).unwrap();
     prop_assert_eq!(&a, &b);
+    for (i, px) in a.iter().enumerate() {
+        prop_assert_eq!(*px, K::ref_rgba8(slots(i as u32 % w, i as u32 / w), BG));
+    }
     let (mut a, mut b) = (vec![Vec4::ZERO; n], vec![Vec4::ZERO; n]);
     fb.resolve_into(&mut a, Background::Transparent).unwrap();
     reference.resolve_into(&mut b, Background::Transparent).unwrap();
@@ -100,10 +136,31 @@ fn check<P: Pixel>(w: u32, h: u32, ops: &[Op]) -> Result<(), TestCaseError> {
         b.iter().map(|p| p.map(f16::to_bits)).collect::<Vec<_>>()
     );
     // Round trip through the pixel-major arrangement.
-    let mut again = span_storage_clone_len::<P>(w, h);
-    let mut fb2 = Grid::<P, Spans>::new_cleared(&mut again, w, h).unwrap();
+    let mut again = span_storage_clone_len::<P<K>>(w, h);
+    let mut fb2 = Grid::<P<K>, Spans>::new_cleared(&mut again, w, h).unwrap();
     fb2.copy_from(&conv).unwrap();
     prop_assert_eq!(fb2.as_rows(), fb.as_rows());
+    Ok(())
+}
+
+/// [`bands_equal_whole`] for one kind of pixel.
+fn bands_equal_whole_for<P: Pixel>(w: u32, h: u32, ops: &[Op], lines: u32) -> Result<(), TestCaseError> {
+    let mut whole = vec![Row::EMPTY; Grid::<P, Spans>::rows_needed(w, h).unwrap()];
+    let mut banded = whole.clone();
+    let mut fb = Grid::<P, Spans>::new_cleared(&mut whole, w, h).unwrap();
+    let mut fb2 = Grid::<P, Spans>::new_cleared(&mut banded, w, h).unwrap();
+    for &(x, y, rows, mask) in ops {
+        fb.insert_span(x, y, &rows, mask).unwrap();
+    }
+    let mut bands: Vec<_> = fb2.bands_mut(lines).collect();
+    prop_assert_eq!(bands.len() as u32, h.div_ceil(lines));
+    for &(x, y, rows, mask) in ops {
+        bands[(y / lines) as usize]
+            .insert_span(x, y % lines, &rows, mask)
+            .unwrap();
+    }
+    drop(bands);
+    prop_assert_eq!(fb.as_rows(), fb2.as_rows());
     Ok(())
 }
 
@@ -122,43 +179,17 @@ fn size() -> impl Strategy<Value = (u32, u32)> {
 proptest! {
     #[test]
     fn span_framebuffers_equal_pixel_major_scalar(((w, h), ops) in size().prop_flat_map(|(w, h)| (Just((w, h)), ops(w, h)))) {
-        check::<Mlab<1>>(w, h, &ops)?;
-        check::<Mlab<4>>(w, h, &ops)?;
-        check::<Ht<1>>(w, h, &ops)?;
-        check::<Ht<3>>(w, h, &ops)?;
+        check::<MlabKind<1, Unbiased>>(w, h, &ops)?;
+        check::<MlabKind<4, Unbiased>>(w, h, &ops)?;
+        check::<HtKind<1, Unbiased>>(w, h, &ops)?;
+        check::<HtKind<3, Unbiased>>(w, h, &ops)?;
     }
 
     /// Inserting through bands (one per thread) gives the same storage as inserting into the whole.
     #[test]
     fn bands_equal_whole(((w, h), ops) in (prop::sample::select(vec![5u32, 8, 13]), 1u32..9).prop_flat_map(|(w, h)| (Just((w, h)), ops(w, h))), lines in 1u32..4) {
-        let mut whole = vec![Row::EMPTY; SpanFramebuffer::<2>::rows_needed(w, h).unwrap()];
-        let mut banded = whole.clone();
-        let mut fb = SpanFramebuffer::<2>::new_cleared(&mut whole, w, h).unwrap();
-        let mut fb2 = SpanFramebuffer::<2>::new_cleared(&mut banded, w, h).unwrap();
-        for &(x, y, rows, mask) in &ops {
-            fb.insert_span(x, y, &rows, mask).unwrap();
-        }
-        let mut bands: Vec<_> = fb2.bands_mut(lines).collect();
-        prop_assert_eq!(bands.len() as u32, h.div_ceil(lines));
-        for &(x, y, rows, mask) in &ops {
-            bands[(y / lines) as usize].insert_span(x, y % lines, &rows, mask).unwrap();
-        }
-        drop(bands);
-        prop_assert_eq!(fb.as_rows(), fb2.as_rows());
-
-        let mut hw = vec![Row::EMPTY; HybridSpanFramebuffer::<1>::rows_needed(w, h).unwrap()];
-        let mut hb = hw.clone();
-        let mut fb = HybridSpanFramebuffer::<1>::new_cleared(&mut hw, w, h).unwrap();
-        let mut fb2 = HybridSpanFramebuffer::<1>::new_cleared(&mut hb, w, h).unwrap();
-        for &(x, y, rows, mask) in &ops {
-            fb.insert_span(x, y, &rows, mask).unwrap();
-        }
-        let mut bands: Vec<_> = fb2.bands_mut(lines).collect();
-        for &(x, y, rows, mask) in &ops {
-            bands[(y / lines) as usize].insert_span(x, y % lines, &rows, mask).unwrap();
-        }
-        drop(bands);
-        prop_assert_eq!(fb.as_rows(), fb2.as_rows());
+        bands_equal_whole_for::<Mlab<2>>(w, h, &ops, lines)?;
+        bands_equal_whole_for::<Ht<1>>(w, h, &ops, lines)?;
     }
 }
 

@@ -22,22 +22,22 @@ fn replay(target: &str, run: fn(&[u8])) {
 
 #[test]
 fn mlab_stream_seeds() {
-    replay("mlab_stream", mlab_fuzz::targets::mlab_stream);
+    replay("mlab_stream", mlab_fuzz::targets::mlab_stream::mlab_stream);
 }
 
 #[test]
 fn hybrid_stream_seeds() {
-    replay("hybrid_stream", mlab_fuzz::targets::hybrid_stream);
+    replay("hybrid_stream", mlab_fuzz::targets::hybrid_stream::hybrid_stream);
 }
 
 #[test]
 fn rows_from_bytes_seeds() {
-    replay("rows_from_bytes", mlab_fuzz::targets::rows_from_bytes);
+    replay("rows_from_bytes", mlab_fuzz::targets::rows_from_bytes::rows_from_bytes);
 }
 
 #[test]
 fn lanes_masks_seeds() {
-    replay("lanes_masks", mlab_fuzz::targets::lanes_masks);
+    replay("lanes_masks", mlab_fuzz::targets::lanes_masks::lanes_masks);
 }
 
 #[test]

@@ -180,13 +180,24 @@ fn check_fragment_lanes_keyed<A: Model>(
     key: Option<[u32; LANES]>,
     mask: u8,
 ) -> Result<(), String> {
-    let name = A::NAME;
     let fl = FragmentLanes {
         color: core::array::from_fn(|c| core::array::from_fn(|l| raws[l].0[c])),
         alpha: raws.map(|r| r.1),
         depth: raws.map(|r| r.2),
         key,
     };
+    check_quantize_lanes::<A>(raws, &fl, mask)?;
+    check_span_fragments::<A>(&fl, mask)
+}
+
+/// [`check_fragment_lanes`]'s quantization in lanes, both constructors, against the scalar
+/// constructors, quantization and hash and the reference row and hash.
+fn check_quantize_lanes<A: Model>(
+    raws: &[([f32; 3], f32, f32); LANES],
+    fl: &FragmentLanes,
+    mask: u8,
+) -> Result<(), String> {
+    let (name, key) = (A::NAME, fl.key);
     // Pixel ids of a span that does not start at 0, wrapping past u32::MAX.
     let first = u32::MAX - 3;
     for straight in [false, true] {
@@ -238,12 +249,17 @@ fn check_fragment_lanes_keyed<A: Model>(
             }
         }
     }
-    // The span inserts of fragments (`Framebuffer::insert_span_fragments`, one span of 8 x 1
-    // pixels): invalid lanes reported and left untouched.
+    Ok(())
+}
+
+/// [`check_fragment_lanes`]'s span inserts of fragments (`Framebuffer::insert_span_fragments`,
+/// one span of 8 x 1 pixels, MLAB M = 2 and HT K = 1): invalid lanes reported and left
+/// untouched, valid ones the scalar inserts of the quantized rows.
+fn check_span_fragments<A: Model>(fl: &FragmentLanes, mask: u8) -> Result<(), String> {
     let q = fl.quantize_at::<A>(mask, 0);
     let mut storage = vec![Row::EMPTY; 16];
     let mut fb = SpanFramebuffer::<2, A>::new_cleared(&mut storage, 8, 1).map_err(|e| format!("{e}"))?;
-    let invalid = fb.insert_span_fragments(0, 0, &fl, mask).map_err(|e| format!("{e}"))?;
+    let invalid = fb.insert_span_fragments(0, 0, fl, mask).map_err(|e| format!("{e}"))?;
     ensure!(
         invalid.0 == q.invalid,
         "insert_span_fragments (MLAB): {invalid:?} vs {q:?}"
@@ -258,7 +274,7 @@ fn check_fragment_lanes_keyed<A: Model>(
     check_mlab_rows(&span, &expected)?;
     let mut storage = vec![Row::EMPTY; 16];
     let mut fb = HybridSpanFramebuffer::<1, A>::new_cleared(&mut storage, 8, 1).map_err(|e| format!("{e}"))?;
-    let invalid = fb.insert_span_fragments(0, 0, &fl, mask).map_err(|e| format!("{e}"))?;
+    let invalid = fb.insert_span_fragments(0, 0, fl, mask).map_err(|e| format!("{e}"))?;
     ensure!(
         invalid.0 == q.invalid,
         "insert_span_fragments (HT): {invalid:?} vs {q:?}"

@@ -12,6 +12,10 @@
 //! - [`check_invariants`]: the blending-array invariants, for the tests and the fuzz targets.
 //! - [`lanes`]: the lanes-vs-scalar checks (the only part that calls the kernel's code, on
 //!   both sides of each comparison).
+//! - [`kind`]: the reference side of a pixel kind ([`RefKind`], [`MlabKind`], [`HtKind`]):
+//!   one pixel's slots inserted into, resolved and cleared by the reference, for the fuzz
+//!   targets and the framebuffer tests (its resolves and lanes insert call the kernel's, the
+//!   side the framebuffers are compared with).
 //!
 //! The oracle and the models use the kernel's types (`Row`, `Fragment`) for input and
 //! output only, and never call its arithmetic: every formula is re-derived from
@@ -23,15 +27,17 @@
 //! (`oracle`, `oracle_order`, `oracle_with_bound(_delta)`), `fuzz/src/reference.rs`
 //! (`oracle`, `sort_front_to_back`), `lab/src/methods.rs` (`reference`'s composite),
 //! `examples/rasterizer.rs` (`composite`); the reference merge and dither of
-//! `tests/unbiased.rs`; the lanes checks of `tests/lanes.rs` and `fuzz/src/targets.rs`.
+//! `tests/unbiased.rs`; the lanes checks of `tests/lanes.rs` and `fuzz/src/targets.rs` (now `fuzz/src/targets/`).
 //! `examples/quickstart.rs` keeps its few lines so that it stands alone.
 
+pub mod kind;
 pub mod lanes;
 pub mod model;
 pub mod oracle;
 pub mod resolve_int;
 pub mod rng;
 
+pub use kind::{HtKind, MlabKind, RefKind};
 pub use model::Model;
 pub use oracle::{DELTA, DELTA_UNBIASED, Layer, oracle, oracle_with_bound};
 pub use rng::Rng;
