@@ -16,8 +16,8 @@ mod common;
 use common::{Rng, gpu};
 use mlab::glam::Vec3;
 use mlab::hybrid::PaperTail;
-use mlab::{Background, DynFramebuffer, Framebuffer, Layers, Paper, Row, Tail, TailFormat, Unbiased};
-use mlab_gpu::{Arith, Compositor, Gpu, GpuFragment, Layout, background_q15, cpu, wgsl};
+use mlab::{ArithKind, Background, DynFramebuffer, Framebuffer, Layers, Paper, Row, Tail, TailFormat, Unbiased};
+use mlab_gpu::{Compositor, Gpu, GpuFragment, Layout, background_q15, cpu, wgsl};
 use wgpu::util::DeviceExt;
 
 /// Backgrounds: transparent (premultiplied output), channels that are not byte values, the
@@ -137,7 +137,7 @@ fn the_wgsl_tail_gives_the_references_t_and_g_on_a_grid_of_alpha_sums_and_counts
     let ((gx, gy), pitch) = grid(items);
     let pipe = pipeline(
         &gpu,
-        format!("{}{TAIL_SHADER}", wgsl::hybrid(1, Arith::Unbiased).expect("text")),
+        format!("{}{TAIL_SHADER}", wgsl::hybrid(1, ArithKind::Unbiased).expect("text")),
         "tail",
     );
     let got = common::dispatch_words(
@@ -243,7 +243,7 @@ fn tail_bytes<T: TailFormat>(rng: &mut Rng, i: u32) -> [u8; 8] {
     T::from_sums(sums, alpha, count).to_bytes()
 }
 
-fn resolve_fields_in<T: TailFormat>(gpu: &Gpu, k: usize, arith: Arith, rng: &mut Rng) -> usize {
+fn resolve_fields_in<T: TailFormat>(gpu: &Gpu, k: usize, arith: ArithKind, rng: &mut Rng) -> usize {
     let (w, h) = (64u32, 32u32);
     let layers = Layers::Hybrid(k);
     let mut rows = vec![Row::EMPTY; layers.rows_needed(w, h).expect("size")];
@@ -272,10 +272,10 @@ fn resolve_fields_in<T: TailFormat>(gpu: &Gpu, k: usize, arith: Arith, rng: &mut
         let mut want = vec![[0u8; 4]; pixels as usize];
         let mut copy = rows.clone();
         match arith {
-            Arith::Paper => {
+            ArithKind::Paper => {
                 DynFramebuffer::<Paper>::new(layers, &mut copy, w, h).and_then(|fb| fb.resolve_rgba8(&mut want, bg))
             }
-            Arith::Unbiased => {
+            ArithKind::Unbiased => {
                 DynFramebuffer::<Unbiased>::new(layers, &mut copy, w, h).and_then(|fb| fb.resolve_rgba8(&mut want, bg))
             }
         }
@@ -300,8 +300,8 @@ fn the_wgsl_ht_resolve_of_any_head_and_tail_bytes_is_the_kernels() {
     let mut rng = Rng(0x6874_7267_6261_3821);
     let mut total = 0;
     for k in Layers::SIZES {
-        total += resolve_fields_in::<PaperTail>(&gpu, k, Arith::Paper, &mut rng);
-        total += resolve_fields_in::<Tail>(&gpu, k, Arith::Unbiased, &mut rng);
+        total += resolve_fields_in::<PaperTail>(&gpu, k, ArithKind::Paper, &mut rng);
+        total += resolve_fields_in::<Tail>(&gpu, k, ArithKind::Unbiased, &mut rng);
     }
     println!("ht_resolve_rgba8: {total} pixels (K = 1..=8, both tails, 6 backgrounds) identical");
 }
@@ -311,7 +311,7 @@ fn check_rgba8(
     c: &Compositor,
     layout: Layout,
     k: usize,
-    arith: Arith,
+    arith: ArithKind,
     (w, h): (u32, u32),
     frags: &[GpuFragment],
     bg: Background,
@@ -395,7 +395,7 @@ fn ht_rgba8_from_the_compositor_is_the_kernels_for_every_k_and_arithmetic() {
     let mut total = 0;
     let mut config = 0usize;
     for k in Layers::SIZES {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             let layout = if config.is_multiple_of(3) {
                 Layout::PixelMajor
             } else {
@@ -432,7 +432,7 @@ fn ht_rgba8_at_the_tails_count_limits_is_the_kernels() {
     // Pixel i receives K + limit - 2 + i fragments that all reach the tail (additive light:
     // alpha 0 except every fifth, distinct colors, never invisible): counts limit - 2 ..=
     // limit + 1, the last two saturated. Tail: limit 2047; PaperTail: 65535 (three dispatches).
-    for (arith, limit) in [(Arith::Unbiased, 2047u32), (Arith::Paper, 65535)] {
+    for (arith, limit) in [(ArithKind::Unbiased, 2047u32), (ArithKind::Paper, 65535)] {
         for k in [1usize, 8] {
             let mut frags = Vec::new();
             for p in 0..4u32 {
@@ -460,8 +460,8 @@ fn ht_rgba8_at_the_tails_count_limits_is_the_kernels() {
                 let t = 2 * (p * (k + 1) + k);
                 let bytes: [u8; 8] = bytemuck::cast([words[t], words[t + 1]]);
                 match arith {
-                    Arith::Paper => PaperTail::from_bytes(bytes).count(),
-                    Arith::Unbiased => Tail::from_bytes(bytes).count(),
+                    ArithKind::Paper => PaperTail::from_bytes(bytes).count(),
+                    ArithKind::Unbiased => Tail::from_bytes(bytes).count(),
                 }
             };
             assert_eq!(
