@@ -2,8 +2,9 @@
 //! fallback that gives the same bytes. Written over the kernel's public API alone (the
 //! compositor does not use this module).
 
-use crate::plan::validate;
-use crate::{GpuError, GpuFragment, Layout};
+use crate::error::GpuError;
+use crate::fragment::GpuFragment;
+use crate::plan::{Layout, validate};
 use mlab::{
     ArithKind, Arithmetic, Background, DynFramebuffer, Framebuffer, FramebufferError, Layers, Paper, Row, Unbiased,
 };

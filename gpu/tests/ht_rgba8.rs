@@ -13,12 +13,11 @@
 
 mod common;
 
-use common::{Rng, gpu};
+use common::{Rng, buffer, gpu, grid, pipeline, saturating};
 use mlab::glam::Vec3;
 use mlab::hybrid::PaperTail;
 use mlab::{ArithKind, Background, DynFramebuffer, Framebuffer, Layers, Paper, Row, Tail, TailFormat, Unbiased};
 use mlab_gpu::{Compositor, Gpu, GpuFragment, Layout, background_q15, cpu, wgsl};
-use wgpu::util::DeviceExt;
 
 /// Backgrounds: transparent (premultiplied output), channels that are not byte values, the
 /// extremes, and what the kernel clamps (NaN, negative, above 1, infinity, subnormal).
@@ -33,43 +32,12 @@ fn backgrounds() -> [Background; 6] {
     ]
 }
 
-fn pipeline(gpu: &Gpu, source: String, entry: &str) -> wgpu::ComputePipeline {
-    let device = gpu.device();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: None,
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: None,
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
-}
-
-/// A 2-D dispatch of `items` invocations: (groups in x, groups in y), invocations per row.
-fn grid(items: u32) -> ((u32, u32), u32) {
-    let groups = items.div_ceil(64).max(1);
-    let gx = groups.min(65535);
-    ((gx, groups.div_ceil(gx)), gx * 64)
-}
-
 fn storage(gpu: &Gpu, words: &[u32]) -> wgpu::Buffer {
-    gpu.device().create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::cast_slice(words),
-        usage: wgpu::BufferUsages::STORAGE,
-    })
+    buffer(gpu, words, wgpu::BufferUsages::STORAGE)
 }
 
 fn uniform(gpu: &Gpu, words: &[u32; 8]) -> wgpu::Buffer {
-    gpu.device().create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::cast_slice(words),
-        usage: wgpu::BufferUsages::UNIFORM,
-    })
+    buffer(gpu, words, wgpu::BufferUsages::UNIFORM)
 }
 
 const TAIL_SHADER: &str = r"
@@ -353,12 +321,7 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Opaque fragments in random order, and coplanar ones: all-opaque tails (S_a = 255 n).
-    streams.push(rng.edited(n, 3000, |_, f| {
-        f.rgba[3] = 1.0;
-    }));
-    streams.push(rng.edited(n, 3000, |_, f| {
-        f.depth = 1.0;
-    }));
+    streams.extend(rng.opaque_and_coplanar(n, 3000));
     // Additive light only (alpha 0: tails with S_a = 0 and a count) and invisible fragments.
     streams.push(rng.edited(n, 3000, |i, f| {
         f.rgba[3] = 0.0;
@@ -368,17 +331,7 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
     }));
     // Saturating tails: bright fragments, half opaque, into 3 pixels (colors, alpha and the
     // default tail's count saturate).
-    streams.push(
-        (0..7000u32)
-            .map(|i| {
-                GpuFragment::new(
-                    i % 3,
-                    [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
-                    (i % 1000) as f32,
-                )
-            })
-            .collect(),
-    );
+    streams.push(saturating(7000));
     // Mid alphas around the routes' boundary (mean alpha near 1/4) with random depths.
     streams.push(rng.edited(n, 4000, |i, f| {
         f.rgba[3] = [0.25, 64.0 / 255.0, 63.0 / 255.0, 0.5][i % 4];

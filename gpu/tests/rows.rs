@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{Rng, gpu};
+use common::{Rng, gpu, saturating};
 use mlab::glam::Vec3;
 use mlab::{ArithKind, Background, FragmentError, Layers};
 use mlab_gpu::{Compositor, GpuError, GpuFragment, Layout, Sort, cpu, wgsl};
@@ -125,28 +125,13 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Opaque fragments in random order (a z-buffer), and coplanar opaque ones.
-    streams.push(rng.edited(n, 10_000, |_, f| {
-        f.rgba[3] = 1.0;
-    }));
-    streams.push(rng.edited(n, 10_000, |_, f| {
-        f.depth = 1.0;
-    }));
+    streams.extend(rng.opaque_and_coplanar(n, 10_000));
     // Equal depths, -0 against +0, extremes of f32, subnormal depths.
     streams.push(rng.edited(n, 10_000, |i, f| {
         f.depth = [0.0, -0.0, 1e-45, -1e-45, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 3.0][i % 8];
     }));
     // Saturating tails: thousands of bright fragments into a few pixels.
-    streams.push(
-        (0..30_000u32)
-            .map(|i| {
-                GpuFragment::new(
-                    i % 3,
-                    [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
-                    (i % 1000) as f32,
-                )
-            })
-            .collect(),
-    );
+    streams.push(saturating(30_000));
     // Additive light only (alpha 0) and invisible fragments (nothing at all).
     streams.push(rng.edited(n, 10_000, |i, f| {
         f.rgba[3] = 0.0;
