@@ -51,14 +51,46 @@ use crate::row::Row;
 use crate::tail::{PaperTail, Tail, TailFormat};
 use crate::unorm::mul;
 
-/// Which arithmetic, for code that is written once for both (crate-internal).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Kind {
-    /// Round to nearest, paper tail.
+/// Which arithmetic, as a value: [`Arithmetic::KIND`] of [`Paper`] and [`Unbiased`], for code
+/// that chooses the arithmetic at run time (a settings menu, a command line) or that is written
+/// once for both (the kernel's lane code, a port).
+///
+/// The contract a port relies on: the two arithmetics are exactly these two, and a port that
+/// writes the kernel's bytes (such as `mlab-gpu`'s WGSL twin) reproduces the one named here
+/// (the [module docs](self) list what each decides).
+///
+/// ```
+/// use mlab::{ArithKind, Arithmetic, Paper, Unbiased};
+/// assert_eq!(Paper::KIND, ArithKind::Paper);
+/// assert_eq!(Unbiased::KIND.name(), Unbiased::NAME);
+/// assert_eq!(ArithKind::default(), ArithKind::Unbiased); // the kernel's default
+/// ```
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum ArithKind {
+    /// [`Paper`]: round to nearest, the paper's tail ([`PaperTail`]).
     Paper,
-    /// Dithered rounding, wide tail.
+    /// [`Unbiased`] (the kernel's default): dithered merges and faint fragments (seeded by each
+    /// fragment's hash in its pixel, [`fragment_hash`]), merged rows at their opacity-weighted
+    /// depth, the 64-bit [`Tail`].
+    #[default]
     Unbiased,
 }
+
+impl ArithKind {
+    /// Both, paper first, for loops.
+    pub const ALL: [ArithKind; 2] = [ArithKind::Paper, ArithKind::Unbiased];
+
+    /// `"paper"` or `"unbiased"` ([`Arithmetic::NAME`] of the type).
+    pub const fn name(self) -> &'static str {
+        match self {
+            ArithKind::Paper => "paper",
+            ArithKind::Unbiased => "unbiased",
+        }
+    }
+}
+
+/// The crate's short name for [`ArithKind`] (the lane code matches on `A::KIND`).
+pub(crate) use ArithKind as Kind;
 
 impl crate::sealed::Sealed for Paper {}
 impl crate::sealed::Sealed for Unbiased {}
@@ -69,16 +101,11 @@ impl crate::sealed::Sealed for Unbiased {}
 pub trait Arithmetic:
     crate::sealed::Sealed + Copy + Default + PartialEq + Eq + core::hash::Hash + core::fmt::Debug + Send + Sync + 'static
 {
-    /// Which one (used by the lane code to pick its instructions).
-    // The type is the crate's own: the trait is sealed, no other crate implements or reads it.
-    #[allow(private_interfaces)]
-    #[doc(hidden)]
-    const KIND: Kind;
-    /// `"paper"` or `"unbiased"`.
-    const NAME: &'static str = match Self::KIND {
-        Kind::Paper => "paper",
-        Kind::Unbiased => "unbiased",
-    };
+    /// Which one, as a value (the lane code picks its instructions by it; a port or a
+    /// run-time choice maps it to and from the type).
+    const KIND: ArithKind;
+    /// `"paper"` or `"unbiased"` ([`ArithKind::name`]).
+    const NAME: &'static str = Self::KIND.name();
     /// The HT tail of this arithmetic.
     type Tail: TailFormat;
 
@@ -105,8 +132,7 @@ pub struct Paper;
 pub struct Unbiased;
 
 impl Arithmetic for Paper {
-    #[allow(private_interfaces)]
-    const KIND: Kind = Kind::Paper;
+    const KIND: ArithKind = ArithKind::Paper;
     type Tail = PaperTail;
 
     /// `A = A_front + round(A_back * T_front / 255)` (saturating), `T = round(T_front * T_back / 255)`,
@@ -127,8 +153,7 @@ impl Arithmetic for Paper {
 }
 
 impl Arithmetic for Unbiased {
-    #[allow(private_interfaces)]
-    const KIND: Kind = Kind::Unbiased;
+    const KIND: ArithKind = ArithKind::Unbiased;
     type Tail = Tail;
 
     /// With the merge dither `d = ((h & 0xffff) * 255) >> 16`:

@@ -185,7 +185,7 @@ mod sealed {
     pub trait Sealed {}
 }
 
-pub use arith::{Arithmetic, Paper, Unbiased, fragment_hash, lowbias32};
+pub use arith::{ArithKind, Arithmetic, Paper, Unbiased, fragment_hash, lowbias32};
 pub use batch::SpanBatcher;
 pub use error::Error;
 pub use fragment::{Fragment, FragmentError};

@@ -135,6 +135,28 @@ pub enum Background {
     Transparent,
 }
 
+impl Background {
+    /// The background as the integer RGBA8 resolve takes it (`docs/layout.md`, "Integer
+    /// resolve": `bgq`): each channel clamped to `[0, 1]` as [`to_rgba8`] clamps (NaN to 0),
+    /// then `floor(b * 32640 + 0.5)` in f32, a multiply and then an add (`32640 = 255 * 128`,
+    /// the accumulator's unit); `None` for [`Background::Transparent`].
+    ///
+    /// The contract a port of the integer resolve relies on: these three integers are what
+    /// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) composites under the
+    /// layers of every pixel, so a port that receives them (as `mlab-gpu`'s shader does,
+    /// computed on the CPU) writes the same bytes.
+    ///
+    /// ```
+    /// use mlab::{Background, glam::Vec3};
+    /// assert_eq!(Background::Opaque(Vec3::new(0.0, 0.5, 2.0)).integer_channels(), Some([0, 16320, 32640]));
+    /// assert_eq!(Background::Transparent.integer_channels(), None);
+    /// ```
+    #[inline]
+    pub fn integer_channels(self) -> Option<[u32; 3]> {
+        int::background(self)
+    }
+}
+
 /// Eq. 5 over rows sorted front to back (any rows are accepted: the result is finite,
 /// color channels in `[0, rows.len()]`, transmittance in `[0, 1]`).
 #[inline]

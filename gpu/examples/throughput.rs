@@ -15,8 +15,8 @@
 //! validation alone. The best of three runs each, after a warm-up; the rows are checked
 //! identical.
 
-use mlab::Layers;
-use mlab_gpu::{Arith, Compositor, Gpu, GpuFragment, Layout, Sort, cpu};
+use mlab::{ArithKind, Layers};
+use mlab_gpu::{Compositor, Gpu, GpuFragment, Layout, Sort, cpu};
 use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -59,7 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         info.name, info.driver, info.driver_info, info.backend
     );
     println!("{n} fragments on {w}x{h}, {layers:?}");
-    for arith in Arith::ALL {
+    for arith in ArithKind::ALL {
         let mut c = Compositor::new(&gpu, layers, arith, Layout::Spans)?;
         let best = |f: &mut dyn FnMut() -> Vec<u32>| {
             let out = f(); // warm-up

@@ -11,8 +11,8 @@
 //! Writes `out/gpu-torus.png` (linear RGBA8, the kernel's `resolve_rgba8`). Needs a Vulkan
 //! driver (`apt-get install mesa-vulkan-drivers libvulkan1` gives Mesa's software one).
 
-use mlab::{Background, DynFramebuffer, Fragment, Framebuffer, Layers, Paper, Row, Unbiased};
-use mlab_gpu::{Arith, Compositor, Gpu, GpuFragment, Layout, cpu};
+use mlab::{ArithKind, Background, DynFramebuffer, Fragment, Framebuffer, Layers, Paper, Row, Unbiased};
+use mlab_gpu::{Compositor, Gpu, GpuFragment, Layout, cpu};
 
 #[path = "../../examples/common/raster.rs"]
 mod raster;
@@ -28,8 +28,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         _ => Layers::Mlab(n),
     };
     let arith = match args.get(2).map(String::as_str) {
-        Some("paper") => Arith::Paper,
-        _ => Arith::Unbiased,
+        Some("paper") => ArithKind::Paper,
+        _ => ArithKind::Unbiased,
     };
 
     // The fragments, in mesh order (unsorted), premultiplied by the kernel's own constructor,
@@ -82,12 +82,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 }
 
 /// The kernel's RGBA8 resolve of span-layout storage words (the CPU's image).
-fn resolve(layers: Layers, arith: Arith, words: &[u32], bg: Background) -> Result<Vec<[u8; 4]>, mlab::Error> {
+fn resolve(layers: Layers, arith: ArithKind, words: &[u32], bg: Background) -> Result<Vec<[u8; 4]>, mlab::Error> {
     let mut rows: Vec<Row> = words.chunks_exact(2).map(|w| Row::from_words([w[0], w[1]])).collect();
     let mut out = vec![[0u8; 4]; (W * H) as usize];
     match arith {
-        Arith::Paper => DynFramebuffer::<Paper>::new(layers, &mut rows, W, H)?.resolve_rgba8(&mut out, bg)?,
-        Arith::Unbiased => DynFramebuffer::<Unbiased>::new(layers, &mut rows, W, H)?.resolve_rgba8(&mut out, bg)?,
+        ArithKind::Paper => DynFramebuffer::<Paper>::new(layers, &mut rows, W, H)?.resolve_rgba8(&mut out, bg)?,
+        ArithKind::Unbiased => DynFramebuffer::<Unbiased>::new(layers, &mut rows, W, H)?.resolve_rgba8(&mut out, bg)?,
     }
     Ok(out)
 }

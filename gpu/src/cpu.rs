@@ -1,28 +1,13 @@
 //! The CPU kernel on the compositor's input: the oracle the GPU path is compared with, and a
-//! fallback that gives the same bytes.
+//! fallback that gives the same bytes. Written over the kernel's public API alone (the
+//! compositor does not use this module).
 
-use crate::{Arith, GpuError, GpuFragment, Layout};
+use crate::error::GpuError;
+use crate::fragment::GpuFragment;
+use crate::plan::{Layout, validate};
 use mlab::{
-    Arithmetic, Background, DynFramebuffer, Fragment, Framebuffer, FramebufferError, Layers, Paper, Row, Unbiased,
+    ArithKind, Arithmetic, Background, DynFramebuffer, Framebuffer, FramebufferError, Layers, Paper, Row, Unbiased,
 };
-
-/// Validates a fragment as the compositor does; the [`Fragment`] carries its stable key, if
-/// it has one.
-pub(crate) fn validate(index: usize, f: &GpuFragment, pixels: u32) -> Result<Fragment, GpuError> {
-    if f.pixel >= pixels {
-        return Err(GpuError::PixelOutOfRange {
-            index,
-            pixel: f.pixel,
-            pixels,
-        });
-    }
-    let fragment =
-        Fragment::premultiplied_rgba(f.rgba, f.depth).map_err(|error| GpuError::Fragment { index, error })?;
-    Ok(match f.key() {
-        Some(key) => fragment.with_key(key),
-        None => fragment,
-    })
-}
 
 fn framebuffer_error(layers: Layers, width: u32, height: u32, e: FramebufferError) -> GpuError {
     match e {
@@ -34,19 +19,20 @@ fn framebuffer_error(layers: Layers, width: u32, height: u32, e: FramebufferErro
 /// The storage words of a `width x height` framebuffer of `layers` in the arithmetic `arith`,
 /// cleared, after inserting `fragments` in order with [`Framebuffer::insert`] on the kernel's
 /// [`DynFramebuffer`] (spans; each fragment with its stable key when it has one, so its hash is
-/// [`mlab::Fragment::hash`] of its `pixel`); for [`Layout::PixelMajor`] its slots re-indexed pixel by pixel
-/// (`docs/layout.md`). Errors as [`crate::Compositor::composite`].
+/// [`mlab::Fragment::hash`] of its `pixel`); for [`Layout::PixelMajor`] its pixels in that order
+/// ([`DynFramebuffer::copy_to_pixel_major`], `docs/layout.md`). Errors as
+/// [`crate::Compositor::composite`].
 pub fn composite(
     layers: Layers,
-    arith: Arith,
+    arith: ArithKind,
     layout: Layout,
     width: u32,
     height: u32,
     fragments: &[GpuFragment],
 ) -> Result<Vec<u32>, GpuError> {
     match arith {
-        Arith::Paper => composite_in::<Paper>(layers, layout, width, height, fragments),
-        Arith::Unbiased => composite_in::<Unbiased>(layers, layout, width, height, fragments),
+        ArithKind::Paper => composite_in::<Paper>(layers, layout, width, height, fragments),
+        ArithKind::Unbiased => composite_in::<Unbiased>(layers, layout, width, height, fragments),
     }
 }
 
@@ -67,39 +53,21 @@ fn composite_in<A: Arithmetic>(
         let fragment = validate(index, f, pixels)?;
         fb.insert(f.pixel % width, f.pixel / width, &fragment).map_err(err)?;
     }
-    let spans = fb.as_words().to_vec();
     Ok(match layout {
-        Layout::Spans => spans,
+        Layout::Spans => fb.as_words().to_vec(),
         Layout::PixelMajor => {
-            let slots = slots(layers);
-            let stride = (width as usize).div_ceil(8);
-            let mut out = Vec::with_capacity(pixels as usize * slots * 2);
-            for y in 0..height as usize {
-                for x in 0..width as usize {
-                    for j in 0..slots {
-                        let i = ((y * stride + x / 8) * slots + j) * 8 + x % 8;
-                        out.extend_from_slice(&spans[2 * i..2 * i + 2]);
-                    }
-                }
-            }
-            out
+            let mut rows = vec![Row::EMPTY; pixels as usize * layers.rows_per_pixel()];
+            fb.copy_to_pixel_major(&mut rows).map_err(err)?;
+            rows.iter().flat_map(|r| r.words()).collect()
         }
     })
-}
-
-/// 8-byte slots per pixel: `M`, or `K + 1` (the tail).
-pub(crate) const fn slots(layers: Layers) -> usize {
-    match layers {
-        Layers::Mlab(m) => m,
-        Layers::Hybrid(k) => k + 1,
-    }
 }
 
 /// The kernel's `Framebuffer::resolve_rgba8` of the framebuffer [`composite`] builds (the
 /// integer resolve for MLAB): `width * height` pixels, row-major.
 pub fn resolve_rgba8(
     layers: Layers,
-    arith: Arith,
+    arith: ArithKind,
     width: u32,
     height: u32,
     fragments: &[GpuFragment],
@@ -110,10 +78,10 @@ pub fn resolve_rgba8(
     let mut rows: Vec<Row> = words.chunks_exact(2).map(|w| Row::from_words([w[0], w[1]])).collect();
     let mut out = vec![[0u8; 4]; (width as usize) * (height as usize)];
     match arith {
-        Arith::Paper => DynFramebuffer::<Paper>::new(layers, &mut rows, width, height)
+        ArithKind::Paper => DynFramebuffer::<Paper>::new(layers, &mut rows, width, height)
             .and_then(|fb| fb.resolve_rgba8(&mut out, background))
             .map_err(err)?,
-        Arith::Unbiased => DynFramebuffer::<Unbiased>::new(layers, &mut rows, width, height)
+        ArithKind::Unbiased => DynFramebuffer::<Unbiased>::new(layers, &mut rows, width, height)
             .and_then(|fb| fb.resolve_rgba8(&mut out, background))
             .map_err(err)?,
     }

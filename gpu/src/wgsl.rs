@@ -41,8 +41,8 @@
 //! Every name the text defines starts with `mlab_`, `ht_` or `composite_` (and the constants
 //! `MLAB_M`, `HT_K`, `MLAB_EMPTY_ROW`, `MLAB_EMPTY_TAIL`). One method and size per shader module.
 
-use crate::{Arith, GpuError};
-use mlab::Layers;
+use crate::error::GpuError;
+use mlab::{ArithKind, Layers};
 
 /// The functions shared by every method: depth test, the fragment hash (`mlab_lowbias32`,
 /// `mlab_fragment_hash`, `mlab_content_key`, `mlab_row_hash`), the exact f32 emulation,
@@ -94,7 +94,7 @@ fn check_size(layers: Layers) -> Result<(), GpuError> {
 /// `mlab_merge` and `mlab_quantize` (the arithmetic's), then [`MLAB_INSERT`] (`mlab_insert`,
 /// and `mlab_resolve_rgba8`, the kernel's integer RGBA8 resolve). `m` is one of
 /// [`Layers::SIZES`] (the kernel's run-time sizes, 1..=8).
-pub fn mlab(m: usize, arith: Arith) -> Result<String, GpuError> {
+pub fn mlab(m: usize, arith: ArithKind) -> Result<String, GpuError> {
     check_size(Layers::Mlab(m))?;
     let a = arith.name();
     Ok(format!(
@@ -104,17 +104,17 @@ pub fn mlab(m: usize, arith: Arith) -> Result<String, GpuError> {
     ))
 }
 
-/// Hybrid Transparency with `k` head rows in the arithmetic `arith` ([`Arith::Paper`]: the
-/// paper's tail, [`Arith::Unbiased`]: the 64-bit [`mlab::Tail`] as two words): [`KERNEL`],
+/// Hybrid Transparency with `k` head rows in the arithmetic `arith` ([`ArithKind::Paper`]: the
+/// paper's tail, [`ArithKind::Unbiased`]: the 64-bit [`mlab::Tail`] as two words): [`KERNEL`],
 /// then `const HT_K`, `ht_tail_add`, `ht_tail_fields` (the tail's decoder) and
 /// `mlab_quantize`, then [`HT_INSERT`] (`ht_insert`) and [`HT_RESOLVE`] (`ht_resolve_rgba8`,
 /// the kernel's integer RGBA8 resolve of HT). `k` is one of [`Layers::SIZES`].
-pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
+pub fn hybrid(k: usize, arith: ArithKind) -> Result<String, GpuError> {
     check_size(Layers::Hybrid(k))?;
     let a = arith.name();
     let tail = match arith {
-        Arith::Paper => "paper",
-        Arith::Unbiased => "wide",
+        ArithKind::Paper => "paper",
+        ArithKind::Unbiased => "wide",
     };
     Ok(format!(
         "{KERNEL}\n// mlab_gpu::wgsl::hybrid({k}, {a})\nconst HT_K: u32 = {k}u;\n\
@@ -127,7 +127,7 @@ pub fn hybrid(k: usize, arith: Arith) -> Result<String, GpuError> {
 /// [`mlab()`] or [`hybrid()`] for `layers`, then the compositor's bindings and its entry point
 /// `composite` (binding layout in `docs/gpu.md` and at the top of that text): the exact source
 /// that [`crate::Compositor`] compiles ([`crate::Compositor::source`]).
-pub fn compositor(layers: Layers, arith: Arith) -> Result<String, GpuError> {
+pub fn compositor(layers: Layers, arith: ArithKind) -> Result<String, GpuError> {
     Ok(match layers {
         Layers::Mlab(m) => format!("{}\n{COMPOSITE}{COMPOSITE_MLAB}{COMPOSITE_RESOLVE}", mlab(m, arith)?),
         Layers::Hybrid(k) => format!("{}\n{COMPOSITE}{COMPOSITE_HT}{COMPOSITE_RESOLVE_HT}", hybrid(k, arith)?),

@@ -13,12 +13,11 @@
 
 mod common;
 
-use common::{Rng, gpu};
+use common::{Rng, buffer, gpu, grid, pipeline, saturating};
 use mlab::glam::Vec3;
 use mlab::hybrid::PaperTail;
-use mlab::{Background, DynFramebuffer, Framebuffer, Layers, Paper, Row, Tail, TailFormat, Unbiased};
-use mlab_gpu::{Arith, Compositor, Gpu, GpuFragment, Layout, background_q15, cpu, wgsl};
-use wgpu::util::DeviceExt;
+use mlab::{ArithKind, Background, DynFramebuffer, Framebuffer, Layers, Paper, Row, Tail, TailFormat, Unbiased};
+use mlab_gpu::{Compositor, Gpu, GpuFragment, Layout, background_q15, cpu, wgsl};
 
 /// Backgrounds: transparent (premultiplied output), channels that are not byte values, the
 /// extremes, and what the kernel clamps (NaN, negative, above 1, infinity, subnormal).
@@ -33,43 +32,12 @@ fn backgrounds() -> [Background; 6] {
     ]
 }
 
-fn pipeline(gpu: &Gpu, source: String, entry: &str) -> wgpu::ComputePipeline {
-    let device = gpu.device();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: None,
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: None,
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
-}
-
-/// A 2-D dispatch of `items` invocations: (groups in x, groups in y), invocations per row.
-fn grid(items: u32) -> ((u32, u32), u32) {
-    let groups = items.div_ceil(64).max(1);
-    let gx = groups.min(65535);
-    ((gx, groups.div_ceil(gx)), gx * 64)
-}
-
 fn storage(gpu: &Gpu, words: &[u32]) -> wgpu::Buffer {
-    gpu.device().create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::cast_slice(words),
-        usage: wgpu::BufferUsages::STORAGE,
-    })
+    buffer(gpu, words, wgpu::BufferUsages::STORAGE)
 }
 
 fn uniform(gpu: &Gpu, words: &[u32; 8]) -> wgpu::Buffer {
-    gpu.device().create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::cast_slice(words),
-        usage: wgpu::BufferUsages::UNIFORM,
-    })
+    buffer(gpu, words, wgpu::BufferUsages::UNIFORM)
 }
 
 const TAIL_SHADER: &str = r"
@@ -137,7 +105,7 @@ fn the_wgsl_tail_gives_the_references_t_and_g_on_a_grid_of_alpha_sums_and_counts
     let ((gx, gy), pitch) = grid(items);
     let pipe = pipeline(
         &gpu,
-        format!("{}{TAIL_SHADER}", wgsl::hybrid(1, Arith::Unbiased).expect("text")),
+        format!("{}{TAIL_SHADER}", wgsl::hybrid(1, ArithKind::Unbiased).expect("text")),
         "tail",
     );
     let got = common::dispatch_words(
@@ -243,7 +211,7 @@ fn tail_bytes<T: TailFormat>(rng: &mut Rng, i: u32) -> [u8; 8] {
     T::from_sums(sums, alpha, count).to_bytes()
 }
 
-fn resolve_fields_in<T: TailFormat>(gpu: &Gpu, k: usize, arith: Arith, rng: &mut Rng) -> usize {
+fn resolve_fields_in<T: TailFormat>(gpu: &Gpu, k: usize, arith: ArithKind, rng: &mut Rng) -> usize {
     let (w, h) = (64u32, 32u32);
     let layers = Layers::Hybrid(k);
     let mut rows = vec![Row::EMPTY; layers.rows_needed(w, h).expect("size")];
@@ -272,10 +240,10 @@ fn resolve_fields_in<T: TailFormat>(gpu: &Gpu, k: usize, arith: Arith, rng: &mut
         let mut want = vec![[0u8; 4]; pixels as usize];
         let mut copy = rows.clone();
         match arith {
-            Arith::Paper => {
+            ArithKind::Paper => {
                 DynFramebuffer::<Paper>::new(layers, &mut copy, w, h).and_then(|fb| fb.resolve_rgba8(&mut want, bg))
             }
-            Arith::Unbiased => {
+            ArithKind::Unbiased => {
                 DynFramebuffer::<Unbiased>::new(layers, &mut copy, w, h).and_then(|fb| fb.resolve_rgba8(&mut want, bg))
             }
         }
@@ -300,8 +268,8 @@ fn the_wgsl_ht_resolve_of_any_head_and_tail_bytes_is_the_kernels() {
     let mut rng = Rng(0x6874_7267_6261_3821);
     let mut total = 0;
     for k in Layers::SIZES {
-        total += resolve_fields_in::<PaperTail>(&gpu, k, Arith::Paper, &mut rng);
-        total += resolve_fields_in::<Tail>(&gpu, k, Arith::Unbiased, &mut rng);
+        total += resolve_fields_in::<PaperTail>(&gpu, k, ArithKind::Paper, &mut rng);
+        total += resolve_fields_in::<Tail>(&gpu, k, ArithKind::Unbiased, &mut rng);
     }
     println!("ht_resolve_rgba8: {total} pixels (K = 1..=8, both tails, 6 backgrounds) identical");
 }
@@ -311,7 +279,7 @@ fn check_rgba8(
     c: &Compositor,
     layout: Layout,
     k: usize,
-    arith: Arith,
+    arith: ArithKind,
     (w, h): (u32, u32),
     frags: &[GpuFragment],
     bg: Background,
@@ -353,12 +321,7 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Opaque fragments in random order, and coplanar ones: all-opaque tails (S_a = 255 n).
-    streams.push(rng.edited(n, 3000, |_, f| {
-        f.rgba[3] = 1.0;
-    }));
-    streams.push(rng.edited(n, 3000, |_, f| {
-        f.depth = 1.0;
-    }));
+    streams.extend(rng.opaque_and_coplanar(n, 3000));
     // Additive light only (alpha 0: tails with S_a = 0 and a count) and invisible fragments.
     streams.push(rng.edited(n, 3000, |i, f| {
         f.rgba[3] = 0.0;
@@ -368,17 +331,7 @@ fn adversarial(rng: &mut Rng, n: u32) -> Vec<Vec<GpuFragment>> {
     }));
     // Saturating tails: bright fragments, half opaque, into 3 pixels (colors, alpha and the
     // default tail's count saturate).
-    streams.push(
-        (0..7000u32)
-            .map(|i| {
-                GpuFragment::new(
-                    i % 3,
-                    [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
-                    (i % 1000) as f32,
-                )
-            })
-            .collect(),
-    );
+    streams.push(saturating(7000));
     // Mid alphas around the routes' boundary (mean alpha near 1/4) with random depths.
     streams.push(rng.edited(n, 4000, |i, f| {
         f.rgba[3] = [0.25, 64.0 / 255.0, 63.0 / 255.0, 0.5][i % 4];
@@ -395,7 +348,7 @@ fn ht_rgba8_from_the_compositor_is_the_kernels_for_every_k_and_arithmetic() {
     let mut total = 0;
     let mut config = 0usize;
     for k in Layers::SIZES {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             let layout = if config.is_multiple_of(3) {
                 Layout::PixelMajor
             } else {
@@ -432,7 +385,7 @@ fn ht_rgba8_at_the_tails_count_limits_is_the_kernels() {
     // Pixel i receives K + limit - 2 + i fragments that all reach the tail (additive light:
     // alpha 0 except every fifth, distinct colors, never invisible): counts limit - 2 ..=
     // limit + 1, the last two saturated. Tail: limit 2047; PaperTail: 65535 (three dispatches).
-    for (arith, limit) in [(Arith::Unbiased, 2047u32), (Arith::Paper, 65535)] {
+    for (arith, limit) in [(ArithKind::Unbiased, 2047u32), (ArithKind::Paper, 65535)] {
         for k in [1usize, 8] {
             let mut frags = Vec::new();
             for p in 0..4u32 {
@@ -460,8 +413,8 @@ fn ht_rgba8_at_the_tails_count_limits_is_the_kernels() {
                 let t = 2 * (p * (k + 1) + k);
                 let bytes: [u8; 8] = bytemuck::cast([words[t], words[t + 1]]);
                 match arith {
-                    Arith::Paper => PaperTail::from_bytes(bytes).count(),
-                    Arith::Unbiased => Tail::from_bytes(bytes).count(),
+                    ArithKind::Paper => PaperTail::from_bytes(bytes).count(),
+                    ArithKind::Unbiased => Tail::from_bytes(bytes).count(),
                 }
             };
             assert_eq!(

@@ -11,7 +11,6 @@ use mlab::glam::Vec3;
 use mlab::mlab::row_hash;
 use mlab::{Arithmetic, Fragment, Paper, Row, Tail, TailFormat, Unbiased, fragment_hash, hybrid::PaperTail};
 use mlab_gpu::wgsl;
-use wgpu::util::DeviceExt;
 
 /// 2^24 cases: `i = a | b << 8 | t << 16` for every front color byte `a`, back color byte `b`
 /// and front transmittance `t`; the other bytes, the depths and the merge's hash vary with a
@@ -195,27 +194,10 @@ fn expected(which: u32, i: u32) -> [u32; 2] {
 }
 
 fn gpu_words(gpu: &mlab_gpu::Gpu, which: u32) -> Vec<u32> {
-    let device = gpu.device();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: None,
-        source: wgpu::ShaderSource::Wgsl(format!("{}{SHADER}", wgsl::KERNEL).into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: None,
-        layout: None,
-        module: &module,
-        entry_point: Some("run"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let groups = CASES / 64;
-    let (gx, gy) = (65535u32.min(groups), groups.div_ceil(65535u32.min(groups)));
+    let pipeline = common::pipeline(gpu, format!("{}{SHADER}", wgsl::KERNEL), "run");
+    let ((gx, gy), pitch) = common::grid(CASES);
     let size = u64::from(CASES) * 8;
-    let n = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: None,
-        contents: bytemuck::cast_slice(&[CASES, gx * 64, which, 0]),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
+    let n = common::buffer(gpu, &[CASES, pitch, which, 0], wgpu::BufferUsages::UNIFORM);
     common::dispatch_words(gpu, &pipeline, &[], &n, (gx, gy), size)
 }
 

@@ -23,7 +23,6 @@ mod common;
 use std::sync::OnceLock;
 
 use mlab_gpu::wgsl;
-use wgpu::util::DeviceExt;
 
 /// Every dither numerator: `u = U / 512`.
 fn numerators() -> impl Iterator<Item = u32> {
@@ -207,34 +206,10 @@ fn test_index(gid: vec3<u32>) -> u32 { return gid.y * test_n.y + gid.x; }
     if (i < test_n.x) { test_out[i] = mlab_f32_add(test_in[2u * i], test_in[2u * i + 1u]); }
 }
 ";
-    let device = gpu.device();
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: None,
-        source: wgpu::ShaderSource::Wgsl(format!("{}{ENTRIES}", wgsl::KERNEL).into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: None,
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    let groups = items.div_ceil(64);
-    let gx = groups.min(65535);
-    let gy = groups.div_ceil(gx);
-    let buf = |contents: &[u8], usage| {
-        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: None,
-            contents,
-            usage,
-        })
-    };
-    let input = buf(bytemuck::cast_slice(input), wgpu::BufferUsages::STORAGE);
-    let n = buf(
-        bytemuck::cast_slice(&[items, gx * 64, base, 0]),
-        wgpu::BufferUsages::UNIFORM,
-    );
+    let pipeline = common::pipeline(gpu, format!("{}{ENTRIES}", wgsl::KERNEL), entry);
+    let ((gx, gy), pitch) = common::grid(items);
+    let input = common::buffer(gpu, input, wgpu::BufferUsages::STORAGE);
+    let n = common::buffer(gpu, &[items, pitch, base, 0], wgpu::BufferUsages::UNIFORM);
     let size = u64::from(items) * u64::from(words) * 4;
     common::dispatch_words(gpu, &pipeline, &[&input], &n, (gx, gy), size)
 }

@@ -4,10 +4,10 @@
 
 mod common;
 
-use common::{Rng, gpu};
+use common::{Rng, gpu, saturating};
 use mlab::glam::Vec3;
-use mlab::{Background, FragmentError, Layers};
-use mlab_gpu::{Arith, Compositor, GpuError, GpuFragment, Layout, Sort, cpu, wgsl};
+use mlab::{ArithKind, Background, FragmentError, Layers};
+use mlab_gpu::{Compositor, GpuError, GpuFragment, Layout, Sort, cpu, wgsl};
 
 fn all_layers() -> impl Iterator<Item = Layers> {
     Layers::SIZES
@@ -17,7 +17,7 @@ fn all_layers() -> impl Iterator<Item = Layers> {
 }
 
 /// GPU and CPU words for one stream; panics with the first differing slot.
-fn check(c: &Compositor, layers: Layers, arith: Arith, layout: Layout, w: u32, h: u32, frags: &[GpuFragment]) {
+fn check(c: &Compositor, layers: Layers, arith: ArithKind, layout: Layout, w: u32, h: u32, frags: &[GpuFragment]) {
     let gpu = c.composite(w, h, frags).expect("gpu composite");
     let cpu = cpu::composite(layers, arith, layout, w, h, frags).expect("cpu composite");
     assert_eq!(gpu.len(), cpu.len(), "{layers:?} {arith:?} {layout:?} {w}x{h}");
@@ -49,7 +49,7 @@ fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
     let mut rng = Rng(0x6d6c_6162_6770_7531);
     let (mut total, mut keyed) = (0usize, 0usize);
     for layers in all_layers() {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             // Spans (the DynFramebuffer's storage) for every size, pixel-major for every other.
             let layout = if total.is_multiple_of(3) {
                 Layout::PixelMajor
@@ -84,7 +84,7 @@ fn every_layout_and_arithmetic_on_the_same_stream() {
     let frags = random_stream(&mut rng, 19, 5, 4_000);
     let keyed = rng.keyed(frags.clone());
     for layers in [Layers::Mlab(3), Layers::Hybrid(7)] {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             for layout in [Layout::PixelMajor, Layout::Spans] {
                 let c = Compositor::new(&gpu, layers, arith, layout).expect("compositor");
                 check(&c, layers, arith, layout, 19, 5, &frags);
@@ -125,28 +125,13 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
             .collect(),
     );
     // Opaque fragments in random order (a z-buffer), and coplanar opaque ones.
-    streams.push(rng.edited(n, 10_000, |_, f| {
-        f.rgba[3] = 1.0;
-    }));
-    streams.push(rng.edited(n, 10_000, |_, f| {
-        f.depth = 1.0;
-    }));
+    streams.extend(rng.opaque_and_coplanar(n, 10_000));
     // Equal depths, -0 against +0, extremes of f32, subnormal depths.
     streams.push(rng.edited(n, 10_000, |i, f| {
         f.depth = [0.0, -0.0, 1e-45, -1e-45, f32::MAX, -f32::MAX, f32::MIN_POSITIVE, 3.0][i % 8];
     }));
     // Saturating tails: thousands of bright fragments into a few pixels.
-    streams.push(
-        (0..30_000u32)
-            .map(|i| {
-                GpuFragment::new(
-                    i % 3,
-                    [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
-                    (i % 1000) as f32,
-                )
-            })
-            .collect(),
-    );
+    streams.push(saturating(30_000));
     // Additive light only (alpha 0) and invisible fragments (nothing at all).
     streams.push(rng.edited(n, 10_000, |i, f| {
         f.rgba[3] = 0.0;
@@ -184,7 +169,7 @@ fn adversarial_streams_match_the_cpu() {
         .into_iter()
         .chain([1, 3, 7].map(Layers::Hybrid))
     {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
             for s in &streams {
                 check(&c, layers, arith, Layout::Spans, w, h, s);
@@ -218,14 +203,14 @@ fn stable_keys_seed_unbiaseds_dithers_on_the_gpu_as_on_the_cpu_and_paper_ignores
     let (plain, keyed) = (fog(0.0, false), fog(0.0, true));
     let (plain_moved, keyed_moved) = (fog(0.001, false), fog(0.001, true));
     for layers in [Layers::Mlab(2), Layers::Mlab(8), Layers::Hybrid(2)] {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
             let run = |frags: &[GpuFragment]| {
                 check(&c, layers, arith, Layout::Spans, w, h, frags);
                 c.composite(w, h, frags).expect("gpu")
             };
             let (p, k, pm, km) = (run(&plain), run(&keyed), run(&plain_moved), run(&keyed_moved));
-            if arith == Arith::Paper {
+            if arith == ArithKind::Paper {
                 assert_eq!(p, k, "{layers:?}: Paper has no dither, no key changes a byte");
             } else {
                 assert_ne!(p, k, "{layers:?}: the keys seed Unbiased's dithers");
@@ -247,11 +232,11 @@ fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
     let frags: Vec<GpuFragment> = (0..70_000u32)
         .map(|i| GpuFragment::new(0, [0.2, 0.1, 1.0, 1.0], (i % 5000) as f32 + 1.0))
         .collect();
-    for arith in Arith::ALL {
+    for arith in ArithKind::ALL {
         let c = Compositor::new(&gpu, Layers::Hybrid(1), arith, Layout::PixelMajor).expect("compositor");
         check(&c, Layers::Hybrid(1), arith, Layout::PixelMajor, 1, 1, &frags);
         let words = c.composite(1, 1, &frags).expect("gpu");
-        if arith == Arith::Paper {
+        if arith == ArithKind::Paper {
             assert_eq!(words[3], u32::MAX, "alpha and count saturated at 65535");
         }
     }
@@ -265,14 +250,14 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
     let frags = random_stream(&mut rng, w, h, 15_000);
     let frags = rng.keyed(frags);
     for layout in [Layout::PixelMajor, Layout::Spans] {
-        let mut c = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, layout).expect("compositor");
+        let mut c = Compositor::new(&gpu, Layers::Hybrid(3), ArithKind::Unbiased, layout).expect("compositor");
         let whole = c.composite(w, h, &frags).expect("one band");
         // About 12 KB of fragments per line (12.5 per pixel, 32 bytes each) and 1 KB of rows:
         // 16 KiB bindings split the frame into bands of one line.
         c.set_max_binding_bytes(16384);
         assert_eq!(c.max_binding_bytes(), 16384);
         assert_eq!(c.composite(w, h, &frags).expect("bands"), whole);
-        check(&c, Layers::Hybrid(3), Arith::Unbiased, layout, w, h, &frags);
+        check(&c, Layers::Hybrid(3), ArithKind::Unbiased, layout, w, h, &frags);
         // One line with more fragments than a binding holds is a typed error.
         let crowded: Vec<GpuFragment> = (0..1000).map(|_| rng.fragment(0)).collect();
         assert!(matches!(
@@ -285,7 +270,7 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
 #[test]
 fn bad_input_is_a_typed_error_not_a_panic() {
     let Some(gpu) = gpu("errors") else { return };
-    let c = Compositor::new(&gpu, Layers::Mlab(2), Arith::Paper, Layout::Spans).expect("compositor");
+    let c = Compositor::new(&gpu, Layers::Mlab(2), ArithKind::Paper, Layout::Spans).expect("compositor");
     let ok = GpuFragment::new(0, [0.1, 0.1, 0.1, 0.5], 1.0);
     let bad = |f: GpuFragment| c.composite(4, 4, &[ok, f]);
     assert_eq!(
@@ -334,11 +319,11 @@ fn bad_input_is_a_typed_error_not_a_panic() {
         Err(GpuError::FrameTooLarge { .. })
     ));
     assert!(matches!(
-        Compositor::new(&gpu, Layers::Mlab(9), Arith::Paper, Layout::Spans),
+        Compositor::new(&gpu, Layers::Mlab(9), ArithKind::Paper, Layout::Spans),
         Err(GpuError::UnsupportedLayers(Layers::Mlab(9)))
     ));
     assert!(matches!(
-        wgsl::hybrid(0, Arith::Paper),
+        wgsl::hybrid(0, ArithKind::Paper),
         Err(GpuError::UnsupportedLayers(_))
     ));
     // Empty frames and empty streams are fine: cleared storage.
@@ -350,7 +335,7 @@ fn bad_input_is_a_typed_error_not_a_panic() {
     ));
     assert_eq!(
         c.composite(3, 1, &[]).expect("empty"),
-        cpu::composite(Layers::Mlab(2), Arith::Paper, Layout::Spans, 3, 1, &[]).expect("cpu")
+        cpu::composite(Layers::Mlab(2), ArithKind::Paper, Layout::Spans, 3, 1, &[]).expect("cpu")
     );
 }
 
@@ -358,7 +343,7 @@ fn bad_input_is_a_typed_error_not_a_panic() {
 fn the_exported_wgsl_is_what_the_compositor_runs() {
     let Some(gpu) = gpu("exported_wgsl") else { return };
     for layers in all_layers() {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
             let library = match layers {
                 Layers::Mlab(m) => wgsl::mlab(m, arith),
@@ -378,7 +363,7 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
     // The library alone (no entry point) is valid WGSL a renderer can include.
     let device = gpu.device();
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    for src in [wgsl::mlab(8, Arith::Unbiased), wgsl::hybrid(1, Arith::Paper)] {
+    for src in [wgsl::mlab(8, ArithKind::Unbiased), wgsl::hybrid(1, ArithKind::Paper)] {
         let _module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: None,
             source: wgpu::ShaderSource::Wgsl(src.expect("text").into()),
@@ -411,7 +396,7 @@ fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
         })
         .collect();
     for layers in all_layers() {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::PixelMajor).expect("compositor");
             check(&c, layers, arith, Layout::PixelMajor, 1, 1, &counting);
             if matches!(layers, Layers::Mlab(1 | 5 | 8) | Layers::Hybrid(2 | 8)) {
@@ -447,7 +432,7 @@ fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
         });
     }
     for layers in [Layers::Mlab(2), Layers::Mlab(4), Layers::Hybrid(3)] {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             let c = Compositor::new(&gpu, layers, arith, Layout::Spans).expect("compositor");
             check(&c, layers, arith, Layout::Spans, w, h, &frags);
             check(&c, layers, arith, Layout::Spans, w, h, &keyed);
@@ -468,7 +453,7 @@ fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
     ];
     let mut total = 0;
     for m in Layers::SIZES {
-        for arith in Arith::ALL {
+        for arith in ArithKind::ALL {
             for layout in [Layout::Spans, Layout::PixelMajor] {
                 let c = Compositor::new(&gpu, Layers::Mlab(m), arith, layout).expect("compositor");
                 for (w, h, n) in [(37, 11, 6_000), (8, 2, 800), (1, 1, 50)] {
@@ -498,15 +483,15 @@ fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
     let frags = random_stream(&mut rng, 30, 40, 15_000);
     let frags = rng.keyed(frags);
     let bg = Background::Opaque(Vec3::new(0.2, 0.4, 0.6));
-    let mut c = Compositor::new(&gpu, Layers::Mlab(4), Arith::Unbiased, Layout::Spans).expect("compositor");
+    let mut c = Compositor::new(&gpu, Layers::Mlab(4), ArithKind::Unbiased, Layout::Spans).expect("compositor");
     let whole = c.composite_rgba8(30, 40, &frags, bg).expect("one band");
     c.set_max_binding_bytes(16384);
     assert_eq!(c.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
-    let mut ht = Compositor::new(&gpu, Layers::Hybrid(3), Arith::Unbiased, Layout::Spans).expect("compositor");
+    let mut ht = Compositor::new(&gpu, Layers::Hybrid(3), ArithKind::Unbiased, Layout::Spans).expect("compositor");
     let whole = ht.composite_rgba8(30, 40, &frags, bg).expect("one band");
     assert_eq!(
         whole.1,
-        cpu::resolve_rgba8(Layers::Hybrid(3), Arith::Unbiased, 30, 40, &frags, bg).expect("cpu")
+        cpu::resolve_rgba8(Layers::Hybrid(3), ArithKind::Unbiased, 30, 40, &frags, bg).expect("cpu")
     );
     ht.set_max_binding_bytes(16384);
     assert_eq!(ht.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
@@ -561,17 +546,17 @@ fn the_gpu_sort_gives_the_stable_order_and_the_cpus_rows() {
         ("one pixel", 1, 1, &crowded),
     ];
     for layers in [Layers::Mlab(2), Layers::Hybrid(3)] {
-        let mut c = Compositor::new(&gpu, layers, Arith::Unbiased, Layout::Spans).expect("compositor");
+        let mut c = Compositor::new(&gpu, layers, ArithKind::Unbiased, Layout::Spans).expect("compositor");
         let software = gpu.adapter_info().device_type == wgpu::DeviceType::Cpu;
         assert_eq!(c.sort(), if software { Sort::Cpu } else { Sort::Gpu });
         c.set_sort(Sort::Gpu);
         for (name, w, h, frags) in cases {
             let want = stable_order(frags);
             assert_eq!(c.order(w, h, frags).expect("gpu order"), want, "{name}");
-            check(&c, layers, Arith::Unbiased, Layout::Spans, w, h, frags);
+            check(&c, layers, ArithKind::Unbiased, Layout::Spans, w, h, frags);
             c.set_sort(Sort::Cpu);
             assert_eq!(c.order(w, h, frags).expect("cpu order"), want, "{name}, Sort::Cpu");
-            check(&c, layers, Arith::Unbiased, Layout::Spans, w, h, frags);
+            check(&c, layers, ArithKind::Unbiased, Layout::Spans, w, h, frags);
             c.set_sort(Sort::Gpu);
         }
     }
@@ -585,11 +570,11 @@ fn the_gpu_sort_over_several_bands_is_the_stable_order() {
     // binding cap gives bands of two lines (20 bands), each sorted on its own.
     let frags = shuffled_coplanar(&mut rng, 30, 40, 8);
     for layout in [Layout::PixelMajor, Layout::Spans] {
-        let mut c = Compositor::new(&gpu, Layers::Mlab(3), Arith::Paper, layout).expect("compositor");
+        let mut c = Compositor::new(&gpu, Layers::Mlab(3), ArithKind::Paper, layout).expect("compositor");
         c.set_sort(Sort::Gpu);
         c.set_max_binding_bytes(16384);
         assert_eq!(c.order(30, 40, &frags).expect("order"), stable_order(&frags));
-        check(&c, Layers::Mlab(3), Arith::Paper, layout, 30, 40, &frags);
+        check(&c, Layers::Mlab(3), ArithKind::Paper, layout, 30, 40, &frags);
     }
 }
 
@@ -600,17 +585,17 @@ fn an_unstable_sort_would_fail_these_tests() {
     let (w, h) = (37, 11);
     let frags = shuffled_coplanar(&mut rng, w, h, 40);
     let layers = Layers::Mlab(2);
-    let want = cpu::composite(layers, Arith::Unbiased, Layout::Spans, w, h, &frags).expect("cpu");
+    let want = cpu::composite(layers, ArithKind::Unbiased, Layout::Spans, w, h, &frags).expect("cpu");
     // On the CPU: swapping two fragments in the middle of pixel 0 (its rows are full, so both
     // are merged) changes the kernel's rows.
     let at: Vec<usize> = (0..frags.len()).filter(|&i| frags[i].pixel == 0).collect();
     let mut swapped = frags.clone();
     swapped.swap(at[at.len() / 2 - 1], at[at.len() / 2]);
-    let other = cpu::composite(layers, Arith::Unbiased, Layout::Spans, w, h, &swapped).expect("cpu");
+    let other = cpu::composite(layers, ArithKind::Unbiased, Layout::Spans, w, h, &swapped).expect("cpu");
     assert!(other != want, "the order within a pixel changes the kernel's bytes");
     // On the GPU: the stable sort gives the kernel's rows; comparing pixels alone (an unstable
     // sort) reorders fragments within pixels, and the comparison of the rows sees it.
-    let mut c = Compositor::new(&gpu, layers, Arith::Unbiased, Layout::Spans).expect("compositor");
+    let mut c = Compositor::new(&gpu, layers, ArithKind::Unbiased, Layout::Spans).expect("compositor");
     c.set_sort(Sort::Gpu);
     assert_eq!(c.composite(w, h, &frags).expect("stable"), want);
     c.set_stable_sort_for_tests(false);

@@ -14,7 +14,7 @@
 //! # Ok::<(), mlab::Error>(())
 //! ```
 
-use super::grid::{Grid, Spans};
+use super::grid::{Grid, PixelMajor, Spans};
 use super::pixel::{Ht, Mlab};
 use super::{Framebuffer, FramebufferError};
 use crate::arith::{Arithmetic, Unbiased};
@@ -50,8 +50,19 @@ impl Layers {
             .ok_or(FramebufferError::SizeOverflow)
     }
 
-    /// Rows (8-byte slots) per pixel: `M`, or `K + 1`.
-    pub(crate) const fn rows_per_pixel(self) -> usize {
+    /// Rows (8-byte slots) per pixel, `R`: `M` for MLAB, `K + 1` for HT (the `K` head rows,
+    /// then the tail in the last slot).
+    ///
+    /// Part of the storage contract a port relies on (`docs/layout.md`): pixel-major storage
+    /// gives pixel `p` the slots `p * R .. (p + 1) * R`; span storage gives slot `j` of pixel
+    /// `(x, y)` the index `((y * ceil(width / 8) + x / 8) * R + j) * 8 + x % 8`.
+    ///
+    /// ```
+    /// use mlab::Layers;
+    /// assert_eq!(Layers::Mlab(4).rows_per_pixel(), 4);
+    /// assert_eq!(Layers::Hybrid(4).rows_per_pixel(), 5);
+    /// ```
+    pub const fn rows_per_pixel(self) -> usize {
         match self {
             Layers::Mlab(m) => m,
             Layers::Hybrid(k) => k + 1,
@@ -146,6 +157,31 @@ impl<'a, A: Arithmetic> DynFramebuffer<'a, A> {
         fb.clear();
         Ok(fb)
     }
+
+    /// Writes every pixel into `out` in pixel-major order (as [`Grid::copy_from`] into a
+    /// [`PixelMajor`] grid of the same kind and size): pixel `p = y * width + x` owns
+    /// `out[p * R .. (p + 1) * R]`, `R` = [`Layers::rows_per_pixel`], the same rows as its
+    /// span slots (the padding lanes are not copied). `out` must hold `width * height * R`
+    /// rows ([`FramebufferError::StorageLength`] otherwise); it is the order of
+    /// `MlabFramebuffer` and `HybridFramebuffer`, and of a port that stores pixels one after
+    /// another (`mlab-gpu`'s `Layout::PixelMajor`).
+    ///
+    /// ```
+    /// use mlab::{DynFramebuffer, Framebuffer, Layers, Row};
+    /// let layers = Layers::Mlab(2);
+    /// let mut storage = vec![Row::EMPTY; layers.rows_needed(3, 2)?];
+    /// let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut storage, 3, 2)?;
+    /// let row = Row::new([10, 0, 0], 200, 1.0);
+    /// fb.insert_row(2, 1, row)?;
+    /// let mut pixels = vec![Row::EMPTY; 3 * 2 * layers.rows_per_pixel()];
+    /// fb.copy_to_pixel_major(&mut pixels)?;
+    /// assert_eq!(pixels[(1 * 3 + 2) * 2], row); // pixel (2, 1), its first slot
+    /// # Ok::<(), mlab::Error>(())
+    /// ```
+    pub fn copy_to_pixel_major(&self, out: &mut [Row]) -> Result<(), FramebufferError> {
+        let (width, height) = (self.width(), self.height());
+        each!(&self.0, f => Grid::<_, PixelMajor>::new(out, width, height)?.copy_from(f))
+    }
 }
 
 impl<'a, A: Arithmetic> Framebuffer for DynFramebuffer<'a, A> {
@@ -184,5 +220,49 @@ impl<'a, A: Arithmetic> Framebuffer for DynFramebuffer<'a, A> {
             let (a, b) = f.split_lines(lines);
             (DynFramebuffer(v(a)), DynFramebuffer(v(b)))
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{DynFramebuffer, Framebuffer, FramebufferError, Layers};
+    use crate::row::Row;
+
+    /// Pixel-major slot `(y * w + x) * R + j` holds span slot `((y * ceil(w / 8) + x / 8) * R +
+    /// j) * 8 + x % 8` (`Layers::rows_per_pixel`'s contract), for MLAB and HT (the tail too).
+    #[test]
+    fn copy_to_pixel_major_reindexes_every_slot() {
+        let (w, h) = (13u32, 3u32);
+        for layers in [Layers::Mlab(3), Layers::Hybrid(2)] {
+            let r = layers.rows_per_pixel();
+            let mut spans = [Row::EMPTY; 144];
+            let mut fb: DynFramebuffer =
+                DynFramebuffer::new_cleared(layers, &mut spans[..2 * 8 * h as usize * r], w, h).expect("size");
+            for i in 0..60u32 {
+                let row = Row::new([(i * 7 % 50) as u8, 3, 1], 250 - (i % 90) as u8, (i % 5) as f32);
+                fb.insert_row(i * 5 % w, i % h, row).expect("inside");
+            }
+            let mut pixels = [Row::EMPTY; 117];
+            let n = (w * h) as usize * r;
+            fb.copy_to_pixel_major(&mut pixels[..n]).expect("length");
+            let stored = fb.as_rows();
+            for (y, x, j) in
+                (0..h as usize).flat_map(|y| (0..w as usize).flat_map(move |x| (0..r).map(move |j| (y, x, j))))
+            {
+                let span = ((y * 2 + x / 8) * r + j) * 8 + x % 8;
+                assert_eq!(
+                    pixels[(y * w as usize + x) * r + j],
+                    stored[span],
+                    "{layers:?} ({x}, {y}) slot {j}"
+                );
+            }
+            assert_eq!(
+                fb.copy_to_pixel_major(&mut pixels[..n - 1]),
+                Err(FramebufferError::StorageLength {
+                    expected: n,
+                    actual: n - 1
+                })
+            );
+        }
     }
 }

@@ -3,6 +3,54 @@
 #![allow(dead_code)]
 
 use mlab_gpu::{Gpu, GpuFragment};
+use wgpu::util::DeviceExt;
+
+/// The compute pipeline `entry` of the WGSL `source`.
+pub fn pipeline(gpu: &Gpu, source: String, entry: &str) -> wgpu::ComputePipeline {
+    let device = gpu.device();
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: None,
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: None,
+        layout: None,
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+/// A 2-D dispatch of `items` invocations: (groups in x, groups in y), invocations per row.
+pub fn grid(items: u32) -> ((u32, u32), u32) {
+    let groups = items.div_ceil(64).max(1);
+    let gx = groups.min(65535);
+    ((gx, groups.div_ceil(gx)), gx * 64)
+}
+
+/// A buffer holding `words`.
+pub fn buffer(gpu: &Gpu, words: &[u32], usage: wgpu::BufferUsages) -> wgpu::Buffer {
+    gpu.device().create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: None,
+        contents: bytemuck::cast_slice(words),
+        usage,
+    })
+}
+
+/// `n` bright fragments into pixels 0, 1 and 2, every other one opaque, at 1000 depths: the
+/// tails' colors, alpha and count saturate.
+pub fn saturating(n: u32) -> Vec<GpuFragment> {
+    (0..n)
+        .map(|i| {
+            GpuFragment::new(
+                i % 3,
+                [1.0, 0.5, 1.0, if i % 2 == 0 { 1.0 } else { 0.5 }],
+                (i % 1000) as f32,
+            )
+        })
+        .collect()
+}
 
 /// Run `pipeline` over `gx * gy` workgroups with bind group 0 = `inputs` (bindings `0..`), an
 /// output storage buffer of `size` bytes, then `uniform`; read the output back as u32 words.
@@ -163,6 +211,13 @@ impl Rng {
     pub fn fragment_in(&mut self, pixels: u32) -> GpuFragment {
         let p = self.below(pixels);
         self.fragment(p)
+    }
+
+    /// Two streams of `count` fragments into `pixels`: opaque ones in random order (a
+    /// z-buffer), then coplanar ones (all at depth 1).
+    pub fn opaque_and_coplanar(&mut self, pixels: u32, count: usize) -> [Vec<GpuFragment>; 2] {
+        let opaque = self.edited(pixels, count, |_, f| f.rgba[3] = 1.0);
+        [opaque, self.edited(pixels, count, |_, f| f.depth = 1.0)]
     }
 
     /// `count` fragments for random pixels of `pixels`, fragment `i` changed by `edit(i, f)`:
