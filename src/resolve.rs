@@ -257,7 +257,7 @@ pub(crate) fn resolve_lanes<F: FloatLanes>(
 /// The integer RGBA8 resolve (`docs/layout.md`, "Integer resolve"): what
 /// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) writes for MLAB. Every
 /// value is an unsigned integer below `2^31`; the one product is [`q15`]; the same bytes in
-/// scalar code, in every `wide` backend (`src/lanes/x8.rs`, 16-bit lanes) and in a shader.
+/// scalar code, in every `wide` backend (`src/lanes/resolve_int/`, 16-bit lanes) and in a shader.
 pub(crate) mod int {
     use super::Background;
 

@@ -39,7 +39,7 @@ pub(crate) const fn mul(a: u8, b: u8) -> u8 {
 ///
 /// Exact on that range (`y = 255 q + r` gives `(y + 1) * 257 = 65536 q + 257 (r + 1) - q`
 /// with `0 < 257 (r + 1) - q < 65536` for `q <= 255`); `div255_floor_is_exact` checks every value.
-/// The lanes compute it in 16-bit slots (`x8.rs`); the scalar merge computes the same value
+/// The lanes compute it in 16-bit slots (`src/lanes/swar.rs`); the scalar merge computes the same value
 /// as `(z + (z >> 8)) >> 8` with `z = y + 1` ([`crate::arith`]). Tests use this form as the
 /// reference.
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! The lane traits: what Listing 1 ([`crate::mlab`]) and Listing 2 ([`crate::hybrid`]) are
 //! written over, and their width-1 implementations (one pixel: [`Row`] and the tails), which
-//! are the scalar kernel. The 8-wide implementations are in `lanes/x8.rs`, the only file
-//! that uses `wide`; the float lane trait of the resolve is [`crate::resolve::FloatLanes`].
+//! are the scalar kernel. The 8-wide implementations are in `lanes/w256.rs` (and the HT one
+//! with AVX-512 in `lanes/w512.rs`); the float lane trait of the resolve is
+//! [`crate::resolve::FloatLanes`].
 
 use crate::arith::Arithmetic;
 use crate::row::Row;

@@ -168,7 +168,7 @@ fn arbitrary_rows_within_the_bound() {
 }
 
 /// HT pixels (K head rows and a tail each): the reference integer formula (equal to the
-/// kernel's scalar and lane definitions, `src/lanes/ht_int.rs` tests) against the exact
+/// kernel's scalar and lane definitions, `src/lanes/resolve_int/ht.rs` tests) against the exact
 /// composite within the derived bound (backgrounds in `[0, 1]`).
 fn check_ht<const K: usize, A: mlab::Arithmetic>(pixels: &[([Row; K], A::Tail)], w: u32) -> f64 {
     let h = (pixels.len() as u32).div_ceil(w);

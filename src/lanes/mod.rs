@@ -20,18 +20,27 @@
 //! Listing 1 and 2 are written once ([`crate::mlab`], [`crate::hybrid`]) over the private
 //! `RowLanes` trait (`src/vector.rs`, with its width-1 implementation by [`Row`] and the
 //! tails: the scalar kernel) and implemented for eight rows in two registers in
-//! `src/lanes/x8.rs`, the only file of the crate that uses `wide`. The resolve (Eq. 5-6, the
+//! `src/lanes/w256.rs` (and one 512-bit register in `w512.rs`). The resolve (Eq. 5-6, the
 //! HT tail) is written once in [`crate::resolve`] over its `FloatLanes` trait, implemented
 //! by `f32` and `wide::f32x8`: scalar and lanes evaluate the same f32 expression tree in the
 //! same order, multiply then add, never FMA. The merge and the tail are exact integer
 //! arithmetic; the lanes use SWAR on 16-bit slots (`pmullw`), the scalar path per-channel
 //! bytes ([`crate::arith`]); both compute the same bytes. This module is the public span
-//! API; lane quantization is [`FragmentLanes`] (`src/lanes/quantize.rs`). No module imports
-//! one that imports it back.
+//! API; one file per concept below it, each beside its scalar half:
+//!
+//! | file | what | scalar half |
+//! |---|---|---|
+//! | `backend.rs` | [`BACKEND`] and every instruction-set choice | |
+//! | `swar.rs` | the merges and tail adds on 16-bit slots, once for any width (`swar!`); their exhaustive tests | `arith.rs`, `tail.rs` |
+//! | `w256.rs`, `w512.rs` | the register leaves: `RowLanes` and `FloatLanes` for 8 rows in two 256-bit registers, or in one 512-bit one (HT with AVX-512) | `vector.rs` |
+//! | `quantize.rs` | [`FragmentLanes`], the lane quantizer and hashes | `fragment.rs`, `arith.rs` |
+//! | `layout.rs` | where each pixel sits in a resolve's registers | |
+//! | `resolve.rs` | the f32 resolves in registers and their RGBA8 writer | `resolve.rs` |
+//! | `resolve_int/` | the integer RGBA8 resolves: MLAB's (SSSE3 or SSE2 form) and HT's | `resolve.rs` (`int`) |
 //!
 //! `wide` picks its instruction set at compile time ([`BACKEND`] says which). Every operation
-//! used here is a native instruction on SSE2 and AVX2 (no `u32` multiply or `u32` min, which
-//! `wide` emulates lane by lane without SSE4.1).
+//! of the inserts and resolves is a native instruction on SSE2 and AVX2 but the hash's 32-bit
+//! multiplies (`lowbias32`, 4 per 8 fragments), which SSE2 lacks (`pmuludq` and shuffles).
 //!
 //! ```
 //! use mlab::lanes::{self, FragmentLanes};
@@ -51,14 +60,22 @@
 //! assert_eq!(span[0][0], Row::new([102, 0, 0], 102, 1.0)); // 0.4 and 0.6 are exact bytes
 //! ```
 
-mod ht_int;
+mod backend;
+mod layout;
 mod quantize;
+mod resolve;
 // The lane helpers narrow lanes whose range their comments state (bytes of 16-bit slots).
 #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
-mod x16;
+mod resolve_int;
+// The same (and its tests).
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
+mod swar;
 // The same.
 #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
-mod x8;
+mod w256;
+// The same.
+#[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss, clippy::cast_possible_wrap)]
+mod w512;
 
 use crate::arith::{Arithmetic, Unbiased};
 use crate::resolve::int::IntBackground;
@@ -66,16 +83,18 @@ use crate::resolve::{Background, Resolved};
 use crate::row::Row;
 use crate::tail::TailFormat;
 use glam::Vec4;
-// Listing 1 runs on the 8-wide lanes of `x8.rs`. Listing 2 runs on one 512-bit register per
-// layer where the build has AVX-512 (`x16.rs`), else on x8's `HtRows8` (no masked stores).
+use resolve_int::ht as ht_int;
+// Listing 1 runs on the 8-wide lanes of `w256.rs`. Listing 2 runs on one 512-bit register per
+// layer where the build has AVX-512 (`w512.rs`, `backend::HT_512`), else on `HtRows8` (no
+// masked stores).
 #[cfg(not(all(target_feature = "avx512f", target_feature = "avx512bw")))]
-use x8::{HtMask8, HtRows8};
-use x8::{Mask8, Rows8};
+use w256::{HtMask8, HtRows8};
+use w256::{Mask8, Rows8};
 #[cfg(all(target_feature = "avx512f", target_feature = "avx512bw"))]
-use x16::{Mask8 as HtMask8, Rows8 as HtRows8};
+use w512::{Mask8 as HtMask8, Rows8 as HtRows8};
 
+pub use backend::BACKEND;
 pub use quantize::{FragmentLanes, QuantizedLanes};
-pub use x8::BACKEND;
 
 /// Pixels per lane group.
 pub const LANES: usize = 8;
@@ -115,7 +134,7 @@ impl<const K: usize, A: Arithmetic> Default for HybridSpan<K, A> {
 /// to [`crate::mlab::insert_with`]`::<A, M>` on each lane, for any rows.
 #[inline(always)]
 pub fn mlab_insert_with<A: Arithmetic, const M: usize>(span: &mut [[Row; LANES]; M], rows: &[Row; LANES], mask: u8) {
-    mlab_insert_hashed::<A, M>(span, rows, &x8::row_hashes(rows, 0, 0), mask);
+    mlab_insert_hashed::<A, M>(span, rows, &quantize::row_hashes(rows, 0, 0), mask);
 }
 
 /// Listing 1 on 8 pixels as [`mlab_insert_with`], lane `i`'s merge seeded by `hashes[i]`
@@ -129,7 +148,7 @@ pub fn mlab_insert_hashed<A: Arithmetic, const M: usize>(
     hashes: &[u32; LANES],
     mask: u8,
 ) {
-    let d = x8::Dither8::new(hashes);
+    let d = w256::Dither8::new(hashes);
     // Full spans (the common case) skip the mask: with a constant all-ones mask the
     // compiler drops the ANDs and the final select.
     if mask == 0xff {
@@ -142,7 +161,7 @@ pub fn mlab_insert_hashed<A: Arithmetic, const M: usize>(
 /// [`crate::mlab::row_hash`] of 8 rows in the pixels of ids `first_pixel + lane` (wrapping).
 #[inline]
 pub fn row_hashes(rows: &[Row; LANES], first_pixel: u32) -> [u32; LANES] {
-    x8::row_hashes(rows, first_pixel, 1)
+    quantize::row_hashes(rows, first_pixel, 1)
 }
 
 /// Listing 2 on 8 pixels. Byte-identical to [`crate::hybrid::insert`] on each lane.
@@ -199,14 +218,14 @@ pub struct ResolvedLanes {
 /// Eq. 5 over an MLAB span (as [`crate::resolve_rows`] on each pixel).
 #[inline]
 pub fn mlab_resolve<const M: usize>(span: &[[Row; LANES]; M]) -> ResolvedLanes {
-    x8::mlab_resolve(span).lanes()
+    resolve::mlab_resolve(span).lanes()
 }
 
 /// [`mlab_resolve`] of 8 pixels stored pixel-major (`[pixel][row]`, as in an
 /// [`MlabFramebuffer`](crate::MlabFramebuffer)), without transposing them first.
 #[inline]
 pub(crate) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> ResolvedLanes {
-    x8::mlab_resolve_pixel_major(pixels).lanes()
+    resolve::mlab_resolve_pixel_major(pixels).lanes()
 }
 
 /// The integer RGBA8 resolve ([`mlab_resolve_rgba8`]) of 8 pixels stored pixel-major.
@@ -216,8 +235,8 @@ pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     background: IntBackground,
 ) -> [[u8; 4]; LANES] {
     match background {
-        Some(bg) => x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(pixels, bg),
-        None => x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(pixels, [0; 3]),
+        Some(bg) => resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, true>(pixels, bg),
+        None => resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, false>(pixels, [0; 3]),
     }
 }
 
@@ -231,8 +250,8 @@ pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
 ) {
     let pairs = out.iter_mut().zip(pixels);
     match background {
-        Some(bg) => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, true>(p, bg)),
-        None => pairs.for_each(|(o, p)| *o = x8::mlab_resolve_pixel_major_rgba8_int::<M, false>(p, [0; 3])),
+        Some(bg) => pairs.for_each(|(o, p)| *o = resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, true>(p, bg)),
+        None => pairs.for_each(|(o, p)| *o = resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, false>(p, [0; 3])),
     }
 }
 
@@ -245,15 +264,15 @@ pub(crate) fn mlab_resolve_line_rgba8<const M: usize>(
 ) {
     let pairs = out.iter_mut().zip(spans);
     match background {
-        Some(bg) => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, true>(s, bg)),
-        None => pairs.for_each(|(o, s)| *o = x8::mlab_resolve_rgba8_int::<M, false>(s, [0; 3])),
+        Some(bg) => pairs.for_each(|(o, s)| *o = resolve_int::mlab_resolve_rgba8_int::<M, true>(s, bg)),
+        None => pairs.for_each(|(o, s)| *o = resolve_int::mlab_resolve_rgba8_int::<M, false>(s, [0; 3])),
     }
 }
 
 /// HT resolve over a span (as [`Hybrid::resolve`](crate::Hybrid::resolve) on each pixel).
 #[inline]
 pub fn hybrid_resolve<const K: usize, A: Arithmetic>(span: &HybridSpan<K, A>) -> ResolvedLanes {
-    x8::hybrid_resolve(&span.head, &span.tails).lanes()
+    resolve::hybrid_resolve(&span.head, &span.tails).lanes()
 }
 
 impl ResolvedLanes {
@@ -276,7 +295,7 @@ impl ResolvedLanes {
 
     /// The 8 pixels as RGBA8 ([`crate::to_rgba8`] per lane), computed in lanes.
     pub fn rgba8(&self, background: Background) -> [[u8; 4]; LANES] {
-        x8::rgba8(&self.color, &self.transmittance, background)
+        resolve::rgba8(&self.color, &self.transmittance, background)
     }
 }
 
@@ -286,8 +305,8 @@ impl ResolvedLanes {
 #[inline(always)]
 pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: IntBackground) -> [[u8; 4]; LANES] {
     match background {
-        Some(bg) => x8::mlab_resolve_rgba8_int::<M, true>(span, bg),
-        None => x8::mlab_resolve_rgba8_int::<M, false>(span, [0; 3]),
+        Some(bg) => resolve_int::mlab_resolve_rgba8_int::<M, true>(span, bg),
+        None => resolve_int::mlab_resolve_rgba8_int::<M, false>(span, [0; 3]),
     }
 }
 
@@ -350,5 +369,5 @@ pub(crate) fn hybrid_resolve_parts<T: TailFormat, const K: usize>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
 ) -> ResolvedLanes {
-    x8::hybrid_resolve(head, tails).lanes()
+    resolve::hybrid_resolve(head, tails).lanes()
 }

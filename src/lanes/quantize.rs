@@ -1,11 +1,13 @@
 //! Lane quantization: eight fragments (structure of arrays) validated and quantized to rows
 //! as [`crate::Fragment`]'s constructors and [`Arithmetic::quantize`] do lane by lane.
 
-use crate::arith::Arithmetic;
+use crate::arith::{Arithmetic, Kind};
+use crate::resolve::FloatLanes;
 use crate::row::Row;
 
 use super::LANES;
-use super::x8;
+use bytemuck::cast;
+use wide::{f32x8, i32x8, u32x8, u64x4};
 
 /// Eight fragments, structure of arrays, linear color: premultiplied for
 /// [`quantize_with`](Self::quantize_with) and `Framebuffer::insert_span_fragments`, straight for
@@ -91,13 +93,13 @@ impl FragmentLanes {
     /// `first_pixel + i` (wrapping): the hashes are [`crate::Fragment::hash`] of those
     /// pixels (`y * width + x` and its neighbours in a framebuffer, which passes them).
     pub fn quantize_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, false, true, first_pixel, true)
+        quantize_lanes::<A>(self, mask, false, true, first_pixel, true)
     }
 
     /// [`quantize_straight_with`](Self::quantize_straight_with) in pixels
     /// `first_pixel + i`, as [`quantize_at`](Self::quantize_at).
     pub fn quantize_straight_at<A: Arithmetic>(&self, mask: u8, first_pixel: u32) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, true, true, first_pixel, true)
+        quantize_lanes::<A>(self, mask, true, true, first_pixel, true)
     }
 
     /// [`quantize_at`](Self::quantize_at) or [`quantize_straight_at`](Self::quantize_straight_at)
@@ -111,7 +113,7 @@ impl FragmentLanes {
         first_pixel: u32,
         all_hashes: bool,
     ) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, straight, true, first_pixel, all_hashes)
+        quantize_lanes::<A>(self, mask, straight, true, first_pixel, all_hashes)
     }
 
     /// [`quantize_with`](Self::quantize_with) for lanes that hold validated
@@ -128,6 +130,128 @@ impl FragmentLanes {
         first_pixel: u32,
         all_hashes: bool,
     ) -> QuantizedLanes {
-        x8::quantize::<A>(self, mask, false, false, first_pixel, all_hashes)
+        quantize_lanes::<A>(self, mask, false, false, first_pixel, all_hashes)
     }
+}
+
+/// [`FragmentLanes::quantize_with`] and [`FragmentLanes::quantize_straight_with`].
+#[inline(always)]
+#[expect(clippy::cast_possible_truncation, reason = "the bitmask of 8 lanes fits a u8")]
+pub(super) fn quantize_lanes<A: Arithmetic>(
+    f: &FragmentLanes,
+    mask: u8,
+    straight: bool,
+    check: bool,
+    first_pixel: u32,
+    all_hashes: bool,
+) -> QuantizedLanes {
+    let zero = f32x8::ZERO;
+    let one = f32x8::ONE;
+    let alpha = f32x8::new(f.alpha);
+    let depth = f32x8::new(f.depth);
+    // Every comparison is false for NaN, so NaN anywhere makes the lane invalid. Without
+    // `check` (lanes of validated `Fragment`s) every lane is valid.
+    let mut ok = if check {
+        alpha.simd_ge(zero) & alpha.simd_le(one) & depth.abs().simd_lt(f32x8::splat(f32::INFINITY))
+    } else {
+        cast(u32x8::MAX)
+    };
+    let mut pre = [zero; 3];
+    for (c, out) in f.color.iter().zip(pre.iter_mut()) {
+        let raw = f32x8::new(*c);
+        *out = if straight {
+            if check {
+                ok &= raw.simd_ge(zero) & raw.simd_lt(f32x8::splat(f32::INFINITY));
+            }
+            raw * alpha
+        } else {
+            raw
+        };
+        if check {
+            ok &= out.simd_ge(zero) & out.simd_le(one);
+        }
+    }
+    // The hashes (`Fragment::hash`): the stable keys, or the content keys, of pixels
+    // `first_pixel + lane`.
+    // Without `all_hashes` (an insert that does not merge: HT) they are computed only where
+    // the quantization reads them, for faint fragments of `Unbiased`; else they are 0.
+    let hashes = || {
+        let bits = |v: f32x8| cast::<f32x8, u32x8>(v);
+        let key = match f.key {
+            Some(k) => u32x8::new(k),
+            None => bits(pre[0]) ^ bits(pre[1]) ^ bits(pre[2]) ^ bits(alpha) ^ bits(depth),
+        };
+        fragment_hashes8(key, first_pixel, 1)
+    };
+    let half = f32x8::splat(0.5);
+    let (u, h) = match A::KIND {
+        Kind::Paper => (half, if all_hashes { hashes() } else { u32x8::ZERO }),
+        // Faint fragments dithered, the others to nearest (as `Unbiased::quantize`):
+        // `u = ((h >> 24) + 0.5) / 256`.
+        Kind::Unbiased => {
+            let faint = (alpha * f32x8::splat(255.0)).simd_lt(f32x8::splat(crate::arith::FAINT_BYTES));
+            if all_hashes || faint.any() {
+                let h = hashes();
+                let dither = (f32x8::from_u(h >> 24) + half) * f32x8::splat(1.0 / 256.0);
+                (faint.select(dither, half), h)
+            } else {
+                (half, u32x8::ZERO)
+            }
+        }
+    };
+    let bytes = pre.map(|c| quantize8(c, u));
+    let t = u32x8::splat(255) - quantize8(alpha, u);
+    let rgbt = bytes[0] | (bytes[1] << 8) | (bytes[2] << 16) | (t << 24);
+    // The lanes that are on and valid, as a lane mask and as bits.
+    let on = {
+        let bits = u32x8::new([1, 2, 4, 8, 16, 32, 64, 128]);
+        (u32x8::splat(mask as u32) & bits).simd_eq(bits) & cast::<f32x8, u32x8>(ok)
+    };
+    let valid = cast::<u32x8, f32x8>(on).to_bitmask() as u8;
+    // Lanes that are off hold the empty row; selected without a branch, then interleaved
+    // into rows (word0, word1) per lane.
+    let [e0, e1] = Row::EMPTY.words();
+    let rgbt: [u32; LANES] = cast(on.select(rgbt, u32x8::splat(e0)));
+    let z: [u32; LANES] = cast(on.select(cast(depth), u32x8::splat(e1)));
+    QuantizedLanes {
+        rows: core::array::from_fn(|i| Row::from_words([rgbt[i], z[i]])),
+        hashes: h.to_array(),
+        valid,
+        invalid: mask & !valid,
+    }
+}
+
+/// [`crate::lowbias32`] of 8 lanes (32-bit lane multiplies).
+#[inline(always)]
+pub(super) fn lowbias32_8(x: u32x8) -> u32x8 {
+    let x = (x ^ (x >> 16)) * u32x8::splat(0x7feb_352d);
+    let x = (x ^ (x >> 15)) * u32x8::splat(0x846c_a68b);
+    x ^ (x >> 16)
+}
+
+/// [`crate::mlab::row_hash`] of 8 rows in pixels `first_pixel + step * lane`.
+#[inline(always)]
+pub(super) fn row_hashes(rows: &[Row; LANES], first_pixel: u32, step: u32) -> [u32; LANES] {
+    let [a, b]: [u32x8; 2] = cast(*rows);
+    // word0 ^ word1 of rows 0-3 in the low dwords of `a`, of rows 4-7 in the high dwords of `b`.
+    let xa = a ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(a) >> 32);
+    let xb = b ^ cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(b) << 32);
+    let [a, b] = [xa.to_array(), xb.to_array()];
+    let key = u32x8::new([a[0], a[2], a[4], a[6], b[1], b[3], b[5], b[7]]);
+    fragment_hashes8(key, first_pixel, step).to_array()
+}
+
+/// [`crate::fragment_hash`] of 8 keys in pixels `first_pixel + step * lane` (wrapping).
+#[inline(always)]
+fn fragment_hashes8(key: u32x8, first_pixel: u32, step: u32) -> u32x8 {
+    let pixel = u32x8::splat(first_pixel) + u32x8::new([0, 1, 2, 3, 4, 5, 6, 7]) * u32x8::splat(step);
+    lowbias32_8(key ^ lowbias32_8(pixel))
+}
+
+/// `floor(v * 255 + u)` for `v` in `[0, 1]` (as [`crate::unorm::quantize`] for `u = 0.5`);
+/// other lanes give unspecified bytes and must be masked.
+#[inline(always)]
+fn quantize8(v: f32x8, u: f32x8) -> u32x8 {
+    let x = v * f32x8::splat(255.0) + u;
+    cast::<i32x8, u32x8>(x.fast_trunc_int()) & u32x8::splat(0xff)
 }

@@ -1,12 +1,12 @@
 //! The integer RGBA8 resolve of HT heads and tails (`crate::resolve::int::ht_rgba8`,
 //! `docs/layout.md`, "Integer resolve of HT") for 8 pixels: one pixel per 32-bit lane, in
-//! the lane order of `src/lanes/x8.rs` (`POSITION`), every step the scalar definition's, so
+//! the lane order of `src/lanes/layout.rs` (`POSITION`), every step the scalar definition's, so
 //! the bytes are the scalar's. The two exact integer divisions are computed as f32 divisions
 //! (both operands below 2^24, the divisor at least 1: the truncated correctly rounded quotient
 //! is the integer quotient; `exact_div_is_the_integer_division` tests it).
 
-use super::LANES;
-use super::x8::{layer_words, tail_fields, unpermute};
+use crate::lanes::LANES;
+use crate::lanes::layout::{layer_words, tail_fields, unpermute};
 use crate::resolve::int;
 use crate::row::Row;
 use crate::tail::TailFormat;
@@ -99,7 +99,7 @@ fn min15(a: u16x8, b: u16x8) -> u16x8 {
 /// from a non-integer quotient to the next integer).
 #[cfg(test)]
 #[inline(always)]
-pub(super) fn exact_div(a: u32x8, b: u32x8) -> u32x8 {
+pub(in crate::lanes) fn exact_div(a: u32x8, b: u32x8) -> u32x8 {
     div_f32(f32x8::from_i32x8(cast(a)), f32x8::from_i32x8(cast(b)))
 }
 
@@ -112,7 +112,7 @@ fn div_f32(a: f32x8, b: f32x8) -> u32x8 {
 /// `int::tail` per lane: `(T, g)` in Q16.
 #[cfg(test)]
 #[inline(always)]
-pub(super) fn tail(alpha: u32x8, count: u32x8) -> (u32x8, u32x8) {
+pub(in crate::lanes) fn tail(alpha: u32x8, count: u32x8) -> (u32x8, u32x8) {
     let (t, g, _) = tail_parts(alpha, count);
     (t, g)
 }
@@ -366,7 +366,7 @@ fn pixels<const OPAQUE: bool>((acc, vk): ([u16x8; 3], u16x8), bg: [u32; 3]) -> [
 /// Whether all 8 tails are empty (every bit zero): such tails add nothing (`T = 1`,
 /// `L = 0`), the pixels are their heads' (`docs/layout.md`).
 #[inline(always)]
-pub(super) fn tails_empty<T: TailFormat>(tails: &[T; LANES]) -> bool {
+pub(in crate::lanes) fn tails_empty<T: TailFormat>(tails: &[T; LANES]) -> bool {
     cast::<[T; LANES], [u64; LANES]>(*tails).iter().fold(0, |a, &t| a | t) == 0
 }
 
@@ -393,7 +393,7 @@ fn tail_parts4(alpha: [u32x8; 4], count: [u32x8; 4]) -> [(u32x8, u32x8, u16x8); 
 /// `bg` (`int::background_channel` values) when `OPAQUE`, else premultiplied; the head alone
 /// where every tail is empty.
 #[inline(always)]
-pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
+pub(in crate::lanes) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
     head: &[[Row; LANES]; K],
     tails: &[T; LANES],
     bg: [u32; 3],
@@ -409,7 +409,7 @@ pub(super) fn resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
 
 /// [`resolve`] of 8 HT pixels whose tails are all empty ([`tails_empty`]): their heads'.
 #[inline(always)]
-pub(super) fn resolve_head<const K: usize, const OPAQUE: bool>(
+pub(in crate::lanes) fn resolve_head<const K: usize, const OPAQUE: bool>(
     head: &[[Row; LANES]; K],
     bg: [u32; 3],
 ) -> [[u8; 4]; LANES] {
@@ -418,7 +418,7 @@ pub(super) fn resolve_head<const K: usize, const OPAQUE: bool>(
 
 /// [`resolve`] of four spans at once (their tails' long dependency chains interleaved).
 #[inline(always)]
-pub(super) fn resolve4<T: TailFormat, const K: usize, const OPAQUE: bool>(
+pub(in crate::lanes) fn resolve4<T: TailFormat, const K: usize, const OPAQUE: bool>(
     spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
     bg: [u32; 3],
 ) -> [[[u8; 4]; LANES]; 4] {
@@ -437,7 +437,7 @@ pub(super) fn resolve4<T: TailFormat, const K: usize, const OPAQUE: bool>(
 
 /// [`resolve`] of two spans at once (their tails' long dependency chains interleaved).
 #[inline(always)]
-pub(super) fn resolve2<T: TailFormat, const K: usize, const OPAQUE: bool>(
+pub(in crate::lanes) fn resolve2<T: TailFormat, const K: usize, const OPAQUE: bool>(
     spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
     bg: [u32; 3],
 ) -> [[[u8; 4]; LANES]; 2] {

@@ -1,6 +1,6 @@
 //! The lane traits ([`crate::vector`]) for eight rows in one 512-bit register: a layer of a
 //! span (8 rows of 8 bytes) is one `u32x16`, each 64-bit lane one whole row. The SWAR
-//! arithmetic is the one of `src/lanes/x8.rs` (`swar!`), instantiated for 512-bit types.
+//! arithmetic is the one of `src/lanes/swar.rs` (`swar!`), instantiated for 512-bit types.
 //!
 //! The HT span inserts (Listing 2) use these lanes when the build has `avx512f` and
 //! `avx512bw` (`x86-64-v4`), where `wide` keeps every type here in one `zmm` register: one
@@ -9,7 +9,7 @@
 //! but measured slower on a Zen 4, whose 512-bit operations take two passes of its 256-bit
 //! units (`docs/performance.md`). Elsewhere `wide` splits the same types into 256-bit (AVX2)
 //! or 128-bit (SSE2, NEON, simd128) parts or plain arrays, so that this source is tested on
-//! every backend (`tests` below, against the 8-wide lanes of `x8.rs`), while the span API
+//! every backend (`tests` below, against the 8-wide lanes of `w256.rs`), while the span API
 //! keeps the 8-wide lanes there.
 #![cfg_attr(not(all(target_feature = "avx512f", target_feature = "avx512bw")), allow(dead_code))]
 
@@ -21,7 +21,7 @@ use crate::vector::{Layer8, RowLanes};
 use bytemuck::cast;
 use wide::{f32x16, f64x8, i16x32, u8x64, u16x32, u32x16, u64x8};
 
-super::x8::swar!(u32x16, u16x32, u8x64, i16x32, u64x8);
+super::swar::swar!(u32x16, u16x32, u8x64, i16x32, u64x8);
 
 /// `(lo & LO) | (hi & HI)`, as a select of dwords by a constant mask (one `vpblendmd`
 /// instead of two ANDs and an OR; on other backends the same bits).
@@ -130,7 +130,7 @@ impl RowLanes for Rows8 {
         };
         Rows8 { v }
     }
-    /// MLAB runs on the 8-wide lanes of `x8.rs` (faster: `docs/performance.md`); these
+    /// MLAB runs on the 8-wide lanes of `w256.rs` (faster: `docs/performance.md`); these
     /// lanes hold only Listing 2's span inserts, which never merge. This merge, for the
     /// tests that run Listing 1 on both widths, is the paper's in SWAR and the scalar
     /// [`Unbiased`](crate::Unbiased) merge lane by lane.
@@ -162,10 +162,10 @@ impl RowLanes for Rows8 {
 
 #[cfg(test)]
 mod tests {
-    //! These lanes against the 8-wide lanes of `x8.rs` (which `tests/lanes.rs` checks against
+    //! These lanes against the 8-wide lanes of `w256.rs` (which `tests/lanes.rs` checks against
     //! the scalar kernel) through Listings 1 and 2, on every backend: on x86-64-v4 the span API
     //! runs these lanes and `tests/lanes.rs` checks them against the scalar kernel directly.
-    use super::super::x8;
+    use super::super::w256;
     use super::*;
     use crate::arith::{Paper, Unbiased};
     use crate::hybrid::PaperTail;
@@ -219,8 +219,13 @@ mod tests {
             let m = mask(rng);
             let h: [u32; LANES] = core::array::from_fn(|_| rng.next() as u32);
             crate::mlab::insert_lanes::<A, _, _, M>(&mut wide, Rows8::load(&rows), Mask8::from_bits(m), h);
-            let d = x8::Dither8::new(&h);
-            crate::mlab::insert_lanes::<A, _, _, M>(&mut narrow, x8::Rows8::load(&rows), x8::Mask8::from_bits(m), d);
+            let d = w256::Dither8::new(&h);
+            crate::mlab::insert_lanes::<A, _, _, M>(
+                &mut narrow,
+                w256::Rows8::load(&rows),
+                w256::Mask8::from_bits(m),
+                d,
+            );
             assert_eq!(wide, narrow, "M = {M}, mask {m:#x}, rows {rows:?}");
         }
     }
@@ -261,8 +266,8 @@ mod tests {
             crate::hybrid::insert_lanes::<_, _, _, T, K>(
                 &mut head8,
                 &mut tails8,
-                x8::Rows8::load(&rows),
-                x8::Mask8::from_bits(m),
+                w256::Rows8::load(&rows),
+                w256::Mask8::from_bits(m),
             );
             assert_eq!(head, head8, "K = {K}, mask {m:#x}, rows {rows:?}");
             assert!(tails == tails8, "K = {K}, mask {m:#x}, rows {rows:?}: tails differ");
