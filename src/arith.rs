@@ -14,7 +14,7 @@
 //! | fragment quantization | `floor(v * 255 + 0.5)` | the same, except faint fragments (`alpha * 255 < 16`): `floor(v * 255 + u)`, `u = ((h >> 24) + 0.5) / 256` |
 //! | HT tail | [`PaperTail`]: colors 3 x 10 bit, alpha 16, count 16 | [`Tail`]: colors 3 x 13 bit, alpha 14, count 11 |
 //!
-//! `h` is the inserted fragment's hash in its pixel, [`fragment_hash`]`(key, pixel)`: with a
+//! `h` is the inserted fragment's hash in its pixel, [`fragment_hash`](crate::fragment_hash)`(key, pixel)`: with a
 //! stable key ([`Fragment::with_key`], the primitive's id) a fragment is rounded the same way
 //! in every frame, so an image holds still while the camera moves; without one the key is the
 //! fragment's content, which changes with its depth (`docs/layout.md`, `docs/quality.md`).
@@ -47,6 +47,8 @@
 //! [`Tail`]: crate::hybrid::Tail
 
 use crate::fragment::Fragment;
+/// The fragment hash (`src/hash.rs`), also at the crate root.
+pub use crate::hash::{fragment_hash, lowbias32};
 use crate::row::Row;
 use crate::tail::{PaperTail, Tail, TailFormat};
 use crate::unorm::mul;
@@ -70,7 +72,7 @@ pub enum ArithKind {
     /// [`Paper`]: round to nearest, the paper's tail ([`PaperTail`]).
     Paper,
     /// [`Unbiased`] (the kernel's default): dithered merges and faint fragments (seeded by each
-    /// fragment's hash in its pixel, [`fragment_hash`]), merged rows at their opacity-weighted
+    /// fragment's hash in its pixel, [`fragment_hash`](crate::fragment_hash)), merged rows at their opacity-weighted
     /// depth, the 64-bit [`Tail`].
     #[default]
     Unbiased,
@@ -110,7 +112,7 @@ pub trait Arithmetic:
     type Tail: TailFormat;
 
     /// Merge two neighbouring rows (Eq. 7-8), `front` nearer, during the insert of a
-    /// fragment whose hash is `h` ([`fragment_hash`]; [`Paper`] ignores it): see
+    /// fragment whose hash is `h` ([`fragment_hash`](crate::fragment_hash); [`Paper`] ignores it): see
     /// [`crate::mlab::insert_hashed`] and the [module docs](self).
     fn merge(front: Row, back: Row, h: u32) -> Row;
 
@@ -222,37 +224,6 @@ fn unbiased_merge(front: Row, back: Row, d: u32) -> Row {
     let packed = saturated | (saturated >> 8);
     let word0 = (packed & 0xffff) | ((packed >> 16) & 0xffff_0000);
     Row::from_words([word0 as u32, f1])
-}
-
-/// The 32-bit integer hash `lowbias32` (Chris Wellons, "Prospecting for Hash Functions",
-/// 2018: the constants of his `lowbias32`), a bijection of `u32`:
-///
-/// ```text
-/// x ^= x >> 16;  x *= 0x7feb352d;  x ^= x >> 15;  x *= 0x846ca68b;  x ^= x >> 16
-/// ```
-///
-/// (multiplications modulo 2^32). Used by [`fragment_hash`].
-#[inline(always)]
-#[must_use]
-pub const fn lowbias32(x: u32) -> u32 {
-    let x = (x ^ (x >> 16)).wrapping_mul(0x7feb_352d);
-    let x = (x ^ (x >> 15)).wrapping_mul(0x846c_a68b);
-    x ^ (x >> 16)
-}
-
-/// The hash of a fragment in a pixel, which seeds both of [`Unbiased`]'s dithers:
-/// `h = lowbias32(key ^ lowbias32(pixel))`.
-///
-/// `key` is the fragment's stable key ([`Fragment::with_key`]: the primitive's id, the same
-/// in every frame) or, without one, its content key ([`Fragment::hash`]); `pixel` is the
-/// pixel's id (`first line's pixel + y * width + x` in a framebuffer, `docs/layout.md`;
-/// whatever id the caller picks for a [`BlendingArray`](crate::BlendingArray), such as a
-/// pixel or ray index). With a stable key and pixel, the same fragment is rounded the same
-/// way in every frame, whatever its depth does: a camera move does not re-roll the dither.
-#[inline(always)]
-#[must_use]
-pub const fn fragment_hash(key: u32, pixel: u32) -> u32 {
-    lowbias32(key ^ lowbias32(pixel))
 }
 
 /// The dither of a merge, in `0..=254`, from the inserted fragment's hash `h`:
@@ -439,7 +410,7 @@ mod tests {
             let b = x.to_le_bytes();
             let front = Row::new([b[0], b[1], b[2]], b[3], (x >> 7) as f32);
             let back = Row::new([b[1], b[3], b[0]], b[2], (x >> 5) as f32 + 1.0);
-            let h = lowbias32(x);
+            let h = crate::hash::lowbias32(x);
             // Empty row behind: identity.
             assert_eq!(Unbiased::merge(front, Row::EMPTY, h), front);
             // Opaque front: nothing behind shows.
@@ -451,28 +422,6 @@ mod tests {
                 0
             );
         }
-    }
-
-    /// `lowbias32` on values published with it (Wellons' `hash-prospector` README lists
-    /// its bias, not values: these were computed from the formula by hand-checked steps) and
-    /// its bijectivity on a sample.
-    #[test]
-    fn lowbias32_is_the_formula() {
-        assert_eq!(lowbias32(0), 0);
-        let by_steps = |x: u32| {
-            let mut x = x;
-            x ^= x >> 16;
-            x = x.wrapping_mul(0x7feb_352d);
-            x ^= x >> 15;
-            x = x.wrapping_mul(0x846c_a68b);
-            x ^ (x >> 16)
-        };
-        let mut x = 1u32;
-        for _ in 0..10_000 {
-            assert_eq!(lowbias32(x), by_steps(x));
-            x = x.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
-        }
-        assert_eq!(fragment_hash(7, 3), lowbias32(7 ^ lowbias32(3)));
     }
 
     /// The centroid weight against its definition in 64-bit arithmetic, for every pair of

@@ -229,7 +229,7 @@ impl Fragment {
     /// premultiplied color channels, alpha and depth (`docs/layout.md`).
     #[inline]
     pub fn hash(&self, pixel: u32) -> u32 {
-        crate::arith::fragment_hash(self.seed_key(), pixel)
+        crate::hash::fragment_hash(self.seed_key(), pixel)
     }
 
     /// The stable key, or the content key ([`hash`](Self::hash)).

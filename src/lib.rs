@@ -170,6 +170,7 @@ pub mod batch;
 pub mod error;
 pub mod fragment;
 pub mod framebuffer;
+mod hash;
 pub mod hybrid;
 pub mod lanes;
 pub mod mlab;
@@ -185,7 +186,7 @@ mod sealed {
     pub trait Sealed {}
 }
 
-pub use arith::{ArithKind, Arithmetic, Paper, Unbiased, fragment_hash, lowbias32};
+pub use arith::{ArithKind, Arithmetic, Paper, Unbiased};
 pub use batch::SpanBatcher;
 pub use error::Error;
 pub use fragment::{Fragment, FragmentError};
@@ -193,6 +194,7 @@ pub use framebuffer::{
     DynFramebuffer, Framebuffer, FramebufferError, Grid, Ht, HybridFramebuffer, HybridSpanFramebuffer, Layers, Mlab,
     MlabFramebuffer, PixelMajor, SpanFramebuffer, Spans,
 };
+pub use hash::{fragment_hash, lowbias32};
 pub use hybrid::{Hybrid, Tail, TailFormat};
 pub use lanes::{FragmentLanes, InvalidLanes};
 pub use mlab::BlendingArray;

@@ -72,7 +72,7 @@ pub fn insert_hashed<A: Arithmetic, const M: usize>(rows: &mut [Row; M], row: Ro
 #[must_use]
 pub const fn row_hash(row: Row, pixel: u32) -> u32 {
     let [w0, w1] = row.words();
-    crate::arith::fragment_hash(w0 ^ w1, pixel)
+    crate::hash::fragment_hash(w0 ^ w1, pixel)
 }
 
 /// Listing 1, written once for every lane width (a [`Row`] is one lane; see

@@ -14,7 +14,7 @@ pub(crate) trait RowLanes: Copy {
     type Mask: Copy + core::ops::BitAnd<Output = Self::Mask>;
     /// Per-lane HT tail of layout `T`.
     type Tail<T: TailFormat>: Copy;
-    /// Per-lane hash of the inserted fragment ([`crate::arith::fragment_hash`]), in the form
+    /// Per-lane hash of the inserted fragment ([`crate::fragment_hash`]), in the form
     /// the merge reads it.
     type Hash: Copy;
     /// `self.z <= other.z` in IEEE f32 (false when either is NaN).

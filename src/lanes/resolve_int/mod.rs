@@ -40,3 +40,127 @@ pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize, const OPAQUE: b
         bg,
     )
 }
+
+#[cfg(test)]
+#[expect(
+    clippy::cast_possible_truncation,
+    reason = "test bytes cut from wider integers on purpose"
+)]
+mod tests {
+    //! The integer resolve: lanes (both arrangements) against the scalar definition, byte for
+    //! byte, on every backend the unit tests run on; the exact cases of `docs/layout.md`.
+    use crate::lanes::{self, LANES};
+    use crate::resolve::int;
+    use crate::resolve::*;
+    use crate::row::Row;
+    use glam::Vec3;
+
+    /// A deterministic generator (SplitMix64).
+    struct Mix(u64);
+    impl Mix {
+        fn next(&mut self) -> u64 {
+            self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+            let mut z = self.0;
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            z ^ (z >> 31)
+        }
+        /// Any 8 bytes, or (one time in four each) an empty, an opaque or an invisible row.
+        fn row(&mut self) -> Row {
+            let x = self.next();
+            let r = Row::from_bytes(x.to_le_bytes());
+            match x >> 62 {
+                0 => Row::EMPTY,
+                1 => Row::new([x as u8, (x >> 8) as u8, (x >> 16) as u8], 0, 1.0),
+                _ => r,
+            }
+        }
+    }
+
+    const BACKGROUNDS: [Background; 5] = [
+        Background::Transparent,
+        Background::Opaque(Vec3::new(0.2, 0.5, 1.0)),
+        Background::Opaque(Vec3::ZERO),
+        Background::Opaque(Vec3::ONE),
+        Background::Opaque(Vec3::new(f32::NAN, f32::INFINITY, -1.0)),
+    ];
+
+    fn check<const M: usize>(mix: &mut Mix) {
+        let pixels: [[Row; M]; LANES] = core::array::from_fn(|_| core::array::from_fn(|_| mix.row()));
+        let span: [[Row; LANES]; M] = core::array::from_fn(|j| core::array::from_fn(|p| pixels[p][j]));
+        for bg in BACKGROUNDS {
+            let want = pixels.map(|p| int::rgba8(&p, bg));
+            assert_eq!(
+                lanes::mlab_resolve_rgba8(&span, int::background(bg)),
+                want,
+                "M = {M} spans {bg:?}: {pixels:?}"
+            );
+            assert_eq!(
+                lanes::mlab_resolve_pixel_major_rgba8(&pixels, int::background(bg)),
+                want,
+                "M = {M} pixel-major {bg:?}: {pixels:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn lanes_match_scalar_byte_for_byte() {
+        let mut mix = Mix(22);
+        for _ in 0..400 {
+            check::<1>(&mut mix);
+            check::<2>(&mut mix);
+            check::<3>(&mut mix);
+            check::<4>(&mut mix);
+            check::<8>(&mut mix);
+        }
+        // Saturation: 300 bright additive rows (the accumulators stop at 32767).
+        let bright = [[Row::new([255, 200, 1], 255, 1.0); LANES]; 300];
+        let want = int::rgba8(&[Row::new([255, 200, 1], 255, 1.0); 300], Background::Transparent);
+        // Each `T = 255` row lowers `v` by one unit while `v > 16384` (docs/layout.md): 300
+        // of them leave alpha 2 (255 * 300 / 32767 = 2.3).
+        assert_eq!(want, [255, 255, 255, 2]);
+        assert_eq!(lanes::mlab_resolve_rgba8(&bright, None), [want; LANES]);
+    }
+
+    /// Every single row (each channel sees every (color, T) pair) in lanes and scalar.
+    #[test]
+    fn every_single_row_in_lanes() {
+        for t in 0..=255u8 {
+            for c0 in (0..256).step_by(LANES) {
+                let rows: [Row; LANES] = core::array::from_fn(|i| {
+                    let c = (c0 + i) as u8;
+                    Row::new([c, 255 - c, c ^ 0xa5], t, 1.0)
+                });
+                for bg in BACKGROUNDS {
+                    let want = rows.map(|r| int::rgba8(&[r], bg));
+                    assert_eq!(lanes::mlab_resolve_rgba8(&[rows], int::background(bg)), want);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn exact_cases() {
+        // An empty pixel is a byte background exactly; any number of empty rows too.
+        for k in 0..=255u8 {
+            let bg = Background::Opaque(Vec3::splat(k as f32 / 255.0));
+            assert_eq!(int::rgba8(&[], bg), [k, k, k, 255]);
+            assert_eq!(int::rgba8(&[Row::EMPTY; 8], bg), [k, k, k, 255]);
+        }
+        // An opaque row shows its bytes, and hides what is behind it.
+        for c in 0..=255u8 {
+            let front = Row::new([c, 255 - c, c / 3], 0, 1.0);
+            for bg in [Background::Transparent, Background::Opaque(Vec3::ONE)] {
+                let want = [c, 255 - c, c / 3, 255];
+                assert_eq!(int::rgba8(&[front], bg), want);
+                assert_eq!(int::rgba8(&[front, Row::new([255; 3], 0, 2.0)], bg), want);
+            }
+        }
+        // The alpha formula rounds `255 (1 - v / 32767)` to nearest for every v.
+        for v in 0..=int::VIS_ONE {
+            let a = int::pixel([0; 3], v, None)[3] as f64;
+            let exact = 255.0 * (1.0 - v as f64 / 32767.0);
+            assert!((a - exact).abs() <= 0.5 + 1.0 / 128.0, "v = {v}: {a} vs {exact}");
+        }
+    }
+}
