@@ -14,7 +14,7 @@
 //! | fragment quantization | `floor(v * 255 + 0.5)` | the same, except faint fragments (`alpha * 255 < 16`): `floor(v * 255 + u)`, `u = ((h >> 24) + 0.5) / 256` |
 //! | HT tail | [`PaperTail`]: colors 3 x 10 bit, alpha 16, count 16 | [`Tail`]: colors 3 x 13 bit, alpha 14, count 11 |
 //!
-//! `h` is the inserted fragment's hash in its pixel, [`fragment_hash`](crate::fragment_hash)`(key, pixel)`: with a
+//! `h` is the inserted fragment's hash in its pixel, [`fragment_hash`]`(key, pixel)`: with a
 //! stable key ([`Fragment::with_key`], the primitive's id) a fragment is rounded the same way
 //! in every frame, so an image holds still while the camera moves; without one the key is the
 //! fragment's content, which changes with its depth (`docs/layout.md`, `docs/quality.md`).
@@ -72,7 +72,7 @@ pub enum ArithKind {
     /// [`Paper`]: round to nearest, the paper's tail ([`PaperTail`]).
     Paper,
     /// [`Unbiased`] (the kernel's default): dithered merges and faint fragments (seeded by each
-    /// fragment's hash in its pixel, [`fragment_hash`](crate::fragment_hash)), merged rows at their opacity-weighted
+    /// fragment's hash in its pixel, [`fragment_hash`]), merged rows at their opacity-weighted
     /// depth, the 64-bit [`Tail`].
     #[default]
     Unbiased,
@@ -112,7 +112,7 @@ pub trait Arithmetic:
     type Tail: TailFormat;
 
     /// Merge two neighbouring rows (Eq. 7-8), `front` nearer, during the insert of a
-    /// fragment whose hash is `h` ([`fragment_hash`](crate::fragment_hash); [`Paper`] ignores it): see
+    /// fragment whose hash is `h` ([`fragment_hash`]; [`Paper`] ignores it): see
     /// [`crate::mlab::insert_hashed`] and the [module docs](self).
     fn merge(front: Row, back: Row, h: u32) -> Row;
 

@@ -1,8 +1,9 @@
-//! The lane traits: what Listing 1 ([`crate::mlab`]) and Listing 2 ([`crate::hybrid`]) are
-//! written over, and their width-1 implementations (one pixel: [`Row`] and the tails), which
-//! are the scalar kernel. The 8-wide implementations are in `lanes/w256.rs` (and the HT one
-//! with AVX-512 in `lanes/w512.rs`); the float lane trait of the resolve is
-//! [`crate::resolve::FloatLanes`].
+//! The lane traits of the inserts: what Listing 1 ([`crate::mlab`]) and Listing 2
+//! ([`crate::hybrid`]) are written over, and their width-1 implementations (one pixel: [`Row`]
+//! and the tails), which are the scalar kernel. The 8-wide implementations are in
+//! `lanes/w256.rs` (and the HT one with AVX-512 in `lanes/w512.rs`). The float lane trait of
+//! the resolve, [`crate::resolve::FloatLanes`], stays beside the resolve: here it would close
+//! an import loop (this file names the tails, whose resolve is written over it).
 
 use crate::arith::Arithmetic;
 use crate::row::Row;
