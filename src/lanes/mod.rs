@@ -96,6 +96,25 @@ use w512::{Mask8 as HtMask8, Rows8 as HtRows8};
 pub use backend::BACKEND;
 pub use quantize::{FragmentLanes, QuantizedLanes};
 
+/// `$e` with the const `$opaque` true and `$bg` the background's channels for an opaque
+/// background, else with `$opaque` false and `$bg` zero: the background's case chosen once,
+/// outside the loops of the resolve it picks.
+macro_rules! by_background {
+    ($background:expr, |$opaque:ident, $bg:ident| $e:expr) => {
+        match $background {
+            Some($bg) => {
+                const $opaque: bool = true;
+                $e
+            }
+            None => {
+                const $opaque: bool = false;
+                let $bg = [0; 3];
+                $e
+            }
+        }
+    };
+}
+
 /// Pixels per lane group.
 pub const LANES: usize = 8;
 
@@ -234,10 +253,10 @@ pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
     pixels: &[[Row; M]; LANES],
     background: IntBackground,
 ) -> [[u8; 4]; LANES] {
-    match background {
-        Some(bg) => resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, true>(pixels, bg),
-        None => resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, false>(pixels, [0; 3]),
-    }
+    by_background!(background, |O, bg| resolve_int::mlab_resolve_pixel_major_rgba8_int::<
+        M,
+        O,
+    >(pixels, bg))
 }
 
 /// [`mlab_resolve_pixel_major_rgba8`] of whole spans of pixel-major pixels into `out`, the
@@ -249,10 +268,9 @@ pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
     background: IntBackground,
 ) {
     let pairs = out.iter_mut().zip(pixels);
-    match background {
-        Some(bg) => pairs.for_each(|(o, p)| *o = resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, true>(p, bg)),
-        None => pairs.for_each(|(o, p)| *o = resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, false>(p, [0; 3])),
-    }
+    by_background!(background, |O, bg| pairs.for_each(
+        |(o, p)| *o = resolve_int::mlab_resolve_pixel_major_rgba8_int::<M, O>(p, bg)
+    ))
 }
 
 /// [`mlab_resolve_rgba8`] of whole stored spans into `out`, the background's case chosen once.
@@ -263,10 +281,8 @@ pub(crate) fn mlab_resolve_line_rgba8<const M: usize>(
     background: IntBackground,
 ) {
     let pairs = out.iter_mut().zip(spans);
-    match background {
-        Some(bg) => pairs.for_each(|(o, s)| *o = resolve_int::mlab_resolve_rgba8_int::<M, true>(s, bg)),
-        None => pairs.for_each(|(o, s)| *o = resolve_int::mlab_resolve_rgba8_int::<M, false>(s, [0; 3])),
-    }
+    by_background!(background, |O, bg| pairs
+        .for_each(|(o, s)| *o = resolve_int::mlab_resolve_rgba8_int::<M, O>(s, bg)))
 }
 
 /// HT resolve over a span (as [`Hybrid::resolve`](crate::Hybrid::resolve) on each pixel).
@@ -304,10 +320,9 @@ impl ResolvedLanes {
 /// 16-bit lanes: byte-identical to the scalar `resolve::int::rgba8` of each pixel.
 #[inline(always)]
 pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: IntBackground) -> [[u8; 4]; LANES] {
-    match background {
-        Some(bg) => resolve_int::mlab_resolve_rgba8_int::<M, true>(span, bg),
-        None => resolve_int::mlab_resolve_rgba8_int::<M, false>(span, [0; 3]),
-    }
+    by_background!(background, |O, bg| resolve_int::mlab_resolve_rgba8_int::<M, O>(
+        span, bg
+    ))
 }
 
 /// The HT resolve of separate head layers and tails straight to RGBA8: the integer resolve
@@ -319,10 +334,7 @@ pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
     tails: &[T; LANES],
     background: IntBackground,
 ) -> [[u8; 4]; LANES] {
-    match background {
-        Some(bg) => ht_int::resolve::<T, K, true>(head, tails, bg),
-        None => ht_int::resolve::<T, K, false>(head, tails, [0; 3]),
-    }
+    by_background!(background, |O, bg| ht_int::resolve::<T, K, O>(head, tails, bg))
 }
 
 /// [`hybrid_resolve_parts_rgba8`] of a span whose tails are all empty (every bit zero): the
@@ -332,10 +344,7 @@ pub(crate) fn hybrid_resolve_head_rgba8<const K: usize>(
     head: &[[Row; LANES]; K],
     background: IntBackground,
 ) -> [[u8; 4]; LANES] {
-    match background {
-        Some(bg) => ht_int::resolve_head::<K, true>(head, bg),
-        None => ht_int::resolve_head::<K, false>(head, [0; 3]),
-    }
+    by_background!(background, |O, bg| ht_int::resolve_head::<K, O>(head, bg))
 }
 
 /// [`hybrid_resolve_parts_rgba8`] of two spans at once: the same bytes, the two spans' tail
@@ -345,10 +354,7 @@ pub(crate) fn hybrid_resolve_parts2_rgba8<T: TailFormat, const K: usize>(
     spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
     background: IntBackground,
 ) -> [[[u8; 4]; LANES]; 2] {
-    match background {
-        Some(bg) => ht_int::resolve2::<T, K, true>(spans, bg),
-        None => ht_int::resolve2::<T, K, false>(spans, [0; 3]),
-    }
+    by_background!(background, |O, bg| ht_int::resolve2::<T, K, O>(spans, bg))
 }
 
 /// [`hybrid_resolve_parts_rgba8`] of four spans at once (as [`hybrid_resolve_parts2_rgba8`]).
@@ -357,10 +363,7 @@ pub(crate) fn hybrid_resolve_parts4_rgba8<T: TailFormat, const K: usize>(
     spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
     background: IntBackground,
 ) -> [[[u8; 4]; LANES]; 4] {
-    match background {
-        Some(bg) => ht_int::resolve4::<T, K, true>(spans, bg),
-        None => ht_int::resolve4::<T, K, false>(spans, [0; 3]),
-    }
+    by_background!(background, |O, bg| ht_int::resolve4::<T, K, O>(spans, bg))
 }
 
 /// [`hybrid_resolve`] on separate head layers and tails.
