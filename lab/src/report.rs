@@ -1,8 +1,8 @@
 //! The evaluation of one stream: the reference, every method, their metrics and timings,
 //! and the Markdown tables.
 
-use crate::faint::{Depth, depth};
 use crate::figure::{Figures, write_pictures};
+use crate::methods::depth::{Depth, depth};
 use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method};
 use crate::metrics::{Scorer, Scores, score};
 use crate::scenes::Scene;

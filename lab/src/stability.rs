@@ -14,7 +14,8 @@
 //! sums are integers), and so is MLAB when it has at least as many rows as a pixel has
 //! fragments (no merge happens): both come out with zero change (tests/stability.rs).
 
-use crate::faint::{Depth, depth, spread};
+use crate::faint::spread;
+use crate::methods::depth::{Depth, depth};
 use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method, Weight};
 use crate::metrics::{Change, Scorer, change, srgb8};
 use crate::picture::create_dir;

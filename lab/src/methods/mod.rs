@@ -16,11 +16,12 @@
 //! kernels through the kernel's span batcher and span framebuffers; [`baselines`] OVER, UNDER,
 //! WBOIT, Bavoil-Myers and Meshkin with the render-target formulas they share with
 //! [`crate::tiled`]; [`adaptive`] Adaptive Transparency; [`moments`] moment-based OIT;
-//! [`kclosest`] K-closest layered OIT. Everything public is re-exported here
+//! [`kclosest`] K-closest layered OIT; [`depth`](mod@depth) fragments per covered pixel. Everything public is re-exported here
 //! (`oit_lab::methods::over_step`, ...).
 
 pub mod adaptive;
 pub mod baselines;
+pub mod depth;
 pub mod kclosest;
 pub mod kernel;
 pub mod lanes;
