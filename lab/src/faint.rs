@@ -5,6 +5,7 @@
 use crate::methods::depth::{Depth, depth};
 use crate::methods::{Arith, BinnedStream, Image, Method, hybrid_with};
 use crate::metrics::{Covered, Quality, compare, compare_covered};
+use crate::out::table::{HT_NOTE, spread};
 use crate::scenes::Scene;
 use crate::stream::Stream;
 use std::sync::Mutex;
@@ -126,7 +127,7 @@ pub fn tail_table(rows: &[(String, u64, TailStats)], k: usize) -> String {
         let pct = 100.0 * t.paper_saturated as f64 / t.depth.covered.max(1) as f64;
         s += &format!(" {} px ({pct:.1} %) |\n", t.paper_saturated);
     }
-    s += &format!("\n{}\n", crate::report::HT_NOTE);
+    s += &format!("\n{}\n", HT_NOTE);
     s
 }
 
@@ -243,37 +244,6 @@ fn measure(
     })
 }
 
-/// `median [min, max]` of `values` with `digits` decimals (`+` sign when `signed`); just the
-/// value when there is one; `-` when none. The median of an even count is the mean of the
-/// middle two. Infinite values print as `inf`.
-pub fn spread(values: &[f64], digits: usize, signed: bool) -> String {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-    if v.is_empty() {
-        return "-".into();
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    let median = if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    };
-    let f = |x: f64| {
-        if x.is_infinite() {
-            if x > 0.0 { "inf".to_string() } else { "-inf".to_string() }
-        } else if signed {
-            format!("{x:+.digits$}")
-        } else {
-            format!("{x:.digits$}")
-        }
-    };
-    if n == 1 {
-        f(median)
-    } else {
-        format!("{} [{}, {}]", f(median), f(v[0]), f(v[n - 1]))
-    }
-}
-
 /// The value of largest magnitude (0 for none).
 fn worst(values: impl IntoIterator<Item = f64>) -> f64 {
     values
@@ -343,7 +313,7 @@ pub fn full_table(runs: &[SceneRun]) -> String {
             );
         }
     }
-    s += &format!("\n{}\n", crate::report::HT_NOTE);
+    s += &format!("\n{}\n", HT_NOTE);
     s
 }
 
@@ -385,7 +355,7 @@ pub fn headline_table(runs: &[SceneRun]) -> String {
         }
         s += "\n";
     }
-    s += &format!("\n{}\n", crate::report::HT_NOTE);
+    s += &format!("\n{}\n", HT_NOTE);
     s
 }
 

@@ -18,6 +18,8 @@
 //!   budget, with the flicker of each under a moving camera.
 //! - [`stability`]: `oit-lab stability`, every scene in several primitive orders and seeds:
 //!   spreads of the quality and the change between orders.
+//! - [`out`]: what the commands write: the tables' shared pieces ([`out::table`]: number
+//!   formats, the median, the notes under the tables, the progress bar).
 //! - [`font`]: the 5x7 bitmap font of the figures' labels.
 //! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.
 //! - [`tiled`]: whole frames on every core: primitives binned into bands and tiles and
@@ -33,6 +35,7 @@ pub mod figure;
 pub mod font;
 pub mod methods;
 pub mod metrics;
+pub mod out;
 pub mod peers;
 pub mod picture;
 pub mod report;

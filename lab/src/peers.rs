@@ -19,12 +19,11 @@
 //!   share of pixels where it exceeds 2 levels ([`Flicker`]): the flicker the method adds to
 //!   what the scene itself does.
 
-use crate::faint::spread;
 use crate::methods::{Arith, BinnedStream, Image, Method, Moments, Weight};
 use crate::metrics::{CHANGE_LEVELS, srgb8};
-use crate::report::progress_bar;
+use crate::out::table::{median, progress_bar, spread};
 use crate::scenes::{Rng, Scene};
-use crate::stability::{self, MethodRun, Plan, SceneStability, median};
+use crate::stability::{self, MethodRun, Plan, SceneStability};
 use crate::stream::{Frag, Stream};
 use std::time::Instant;
 

@@ -5,21 +5,11 @@ use crate::figure::{Figures, write_pictures};
 use crate::methods::depth::{Depth, depth};
 use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method};
 use crate::metrics::{Scorer, Scores, score};
+use crate::out::table::{COVERED_NOTE, HT_NOTE, num, progress_bar};
 use crate::scenes::Scene;
 use crate::stream::Stream;
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
 use std::time::Instant;
-
-/// How the tables name HT, said once under every table that has an HT row: the lab's
-/// `HT K` has `K` head rows plus the tail, which the paper (section 5) calls HT `K + 1`.
-pub const HT_NOTE: &str = "HT naming: the lab's `HT K` = K head rows + the tail = the paper's HT K+1 \
-                           (8 (K+1) B/px): HT 0, 1, 3, 7 here are the paper's HT 1, 2, 4, 8.";
-
-/// Every covered-pixel column is over the pixels where the reference has at least one
-/// fragment; said under the tables.
-pub const COVERED_NOTE: &str = "covered: over the pixels with at least one fragment (the rest \
-                                show the background in every method); whole: every pixel.";
 
 /// One method's result on one stream.
 pub struct Entry {
@@ -131,14 +121,6 @@ pub fn evaluate(
     })
 }
 
-fn num(x: f64, digits: usize) -> String {
-    if x.is_infinite() {
-        "inf".into()
-    } else {
-        format!("{x:.digits$}")
-    }
-}
-
 /// The full Markdown table: one row per scene and method, covered-pixel metrics beside the
 /// whole-image ones, then the notes ([`COVERED_NOTE`], [`HT_NOTE`]).
 pub fn full_table(evals: &[Evaluation]) -> String {
@@ -230,15 +212,6 @@ pub fn vis_bias_where(e: &Evaluation, min_frags: u32) -> Vec<(String, f64, usize
             (x.method.name(), s / sel.len().max(1) as f64, sel.len())
         })
         .collect()
-}
-
-/// A progress bar on stderr (hidden when stderr is not a terminal).
-pub fn progress_bar(len: u64) -> ProgressBar {
-    let pb = ProgressBar::new(len);
-    if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} [{elapsed_precise}] {msg}") {
-        pb.set_style(style);
-    }
-    pb
 }
 
 /// The main job (`oit-lab run`): every scene of `scenes` at `size` with every method of

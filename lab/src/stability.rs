@@ -14,12 +14,11 @@
 //! sums are integers), and so is MLAB when it has at least as many rows as a pixel has
 //! fragments (no merge happens): both come out with zero change (tests/stability.rs).
 
-use crate::faint::spread;
 use crate::methods::depth::{Depth, depth};
 use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method, Weight};
 use crate::metrics::{Change, Scorer, change, srgb8};
+use crate::out::table::{HT_NOTE, median, min_med_max, progress_bar, spread};
 use crate::picture::create_dir;
-use crate::report::progress_bar;
 use crate::scenes::{Primitives, Rng, Scene};
 use std::path::Path;
 use std::sync::Mutex;
@@ -334,39 +333,6 @@ pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)
     })
 }
 
-/// Median of the values that are not NaN (the mean of the middle two for an even count);
-/// NaN when there is none.
-pub fn median(values: &[f64]) -> f64 {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    }
-}
-
-fn min_med_max(values: &[f64], digits: usize) -> String {
-    let v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-    if v.is_empty() {
-        return "-".into();
-    }
-    let f = |x: f64| {
-        if x.is_infinite() {
-            "inf".to_string()
-        } else {
-            format!("{x:.digits$}")
-        }
-    };
-    let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    format!("{} / {} / {}", f(lo), f(median(&v)), f(hi))
-}
-
 /// Per seed, the range (max - min) of the covered PSNR over the seed's orders; infinite
 /// values (an exact image) count as the largest finite one plus nothing: a seed whose orders
 /// are all exact has range 0, one mixing exact and inexact images has an infinite range.
@@ -442,7 +408,7 @@ pub fn table(scenes: &[SceneStability], shown: &[Method]) -> String {
     s += &format!(
         "\nSamples: every seed x order; covered: pixels with at least one fragment; a pixel \
          changes when a displayed 8-bit sRGB channel moves by more than 2 levels. {}\n",
-        crate::report::HT_NOTE
+        HT_NOTE
     );
     s
 }
@@ -516,7 +482,7 @@ pub fn recommendation_table(scenes: &[SceneStability]) -> String {
     s += &format!(
         "\nTargets: PSNR >= {TARGET_PSNR} dB and mean FLIP <= {TARGET_FLIP} on covered pixels, both at the median \
          over every seed and order. MLAB M in {MLAB_SIZES:?}, HT K in {HT_SIZES:?}. {}\n",
-        crate::report::HT_NOTE
+        HT_NOTE
     );
     s
 }

@@ -3,10 +3,11 @@
 
 use mlab::hybrid::{PaperTail, TailFormat};
 use mlab::{Arithmetic, Framebuffer, HybridFramebuffer, Paper, Row, Unbiased};
-use oit_lab::faint::{TailSums, quantile, run_stream, spread, tail_sums};
+use oit_lab::faint::{TailSums, quantile, run_stream, tail_sums};
 use oit_lab::methods::depth::depth;
 use oit_lab::methods::{Arith, BinnedStream, Image, Method, hybrid_with};
 use oit_lab::metrics::{compare, compare_covered};
+use oit_lab::out::table::spread;
 use oit_lab::scenes::Scene;
 use oit_lab::stream::{Frag, Stream};
 

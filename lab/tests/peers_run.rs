@@ -1,9 +1,10 @@
 //! `oit-lab peers` on tiny frames: the camera path, its flicker measure, the budget choice.
 
 use oit_lab::methods::Method;
+use oit_lab::out::table::median;
 use oit_lab::peers::{CAMERA_FRAMES, best_within, bounded_methods, camera_flicker, camera_stream};
 use oit_lab::scenes::Scene;
-use oit_lab::stability::{Plan, median, run_scene};
+use oit_lab::stability::{Plan, run_scene};
 
 #[test]
 fn camera_path_starts_at_the_scene_and_moves() {

@@ -1,0 +1,3 @@
+//! What the commands write: the tables' shared pieces ([`table`]).
+
+pub mod table;
