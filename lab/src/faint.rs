@@ -3,7 +3,7 @@
 //! `oit-lab faint` (MLAB and HT at equal memory, both arithmetics, against unsorted OVER).
 
 use crate::methods::depth::{Depth, depth};
-use crate::methods::{Arith, BinnedStream, Image, Method, hybrid_with};
+use crate::methods::{Arith, BinnedStream, Image, Method, catalog, hybrid_with};
 use crate::metrics::{Covered, Quality, compare, compare_covered};
 use crate::out::table::{HT_NOTE, spread};
 use crate::scenes::Scene;
@@ -129,22 +129,6 @@ pub fn tail_table(rows: &[(String, u64, TailStats)], k: usize) -> String {
     }
     s += &format!("\n{}\n", HT_NOTE);
     s
-}
-
-/// The methods of the report, by memory: unsorted OVER (8 B), then for `M` = 1, 2, 4, 8 MLAB
-/// `M` and HT `K = M - 1` (both `8 M` bytes per pixel), each with the paper's arithmetic and
-/// the unbiased one.
-pub fn methods() -> Vec<Method> {
-    let mut v = vec![Method::Over];
-    for m in [1usize, 2, 4, 8] {
-        for a in Arith::ALL {
-            v.push(Method::MlabWith(m, a));
-        }
-        for a in Arith::ALL {
-            v.push(Method::HybridWith(m - 1, a));
-        }
-    }
-    v
 }
 
 /// One method on one stream.
@@ -385,11 +369,11 @@ pub fn tails_command(size: (u32, u32), seeds: &[u64], scenes: &[Scene], k: usize
     Ok(())
 }
 
-/// `oit-lab faint`: every scene of `scenes` at every seed of `seeds` with [`methods`]
+/// `oit-lab faint`: every scene of `scenes` at every seed of `seeds` with [`catalog::faint`]
 /// ([`run_stream`]); prints the headline table and every method's.
 pub fn command(size: (u32, u32), seeds: &[u64], scenes: &[Scene], with_flip: bool) -> Result<(), String> {
     let start = Instant::now();
-    let methods = methods();
+    let methods = catalog::faint();
     let mut runs = Vec::new();
     for sc in scenes {
         for &seed in seeds {

@@ -3,7 +3,7 @@
 //! Every command's work is in the library (`oit_lab::report::run_command`, ...); this file
 //! parses the arguments and dispatches.
 
-use oit_lab::methods::Arith;
+use oit_lab::methods::{Arith, catalog};
 use oit_lab::scenes::Scene;
 use oit_lab::tiled::TileSize;
 use oit_lab::{bench, dump, faint, peers, report, stability};
@@ -483,7 +483,7 @@ fn cmd_stability(mut a: Args) -> Result<(), Fail> {
         return Err(usage("--orders: at least 2"));
     }
     let scenes = parse_scenes(&mut a, &Scene::MAIN)?;
-    let all = stability::methods();
+    let all = catalog::stability();
     let strip_name = a.value("--strip")?.unwrap_or_else(|| "MLAB 2".into());
     let strip = all
         .iter()
@@ -500,7 +500,7 @@ fn cmd_stability(mut a: Args) -> Result<(), Fail> {
         orders,
         methods: all,
         with_flip,
-        pair_flip: stability::table_methods(),
+        pair_flip: catalog::stability_table(),
         strip: pngs.then_some((strip, 4.min(orders))),
     };
     stability::command(&plan, &scenes, &out).map_err(runtime)

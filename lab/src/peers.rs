@@ -19,7 +19,8 @@
 //!   share of pixels where it exceeds 2 levels ([`Flicker`]): the flicker the method adds to
 //!   what the scene itself does.
 
-use crate::methods::{Arith, BinnedStream, Image, Method, Moments, Weight};
+use crate::methods::catalog::{self, BUDGETS};
+use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{CHANGE_LEVELS, srgb8};
 use crate::out::table::{median, progress_bar, spread};
 use crate::scenes::{Rng, Scene};
@@ -27,50 +28,8 @@ use crate::stability::{self, MethodRun, Plan, SceneStability};
 use crate::stream::{Frag, Stream};
 use std::time::Instant;
 
-/// The memory budgets of the tables, B/px.
-pub const BUDGETS: [usize; 4] = [8, 16, 32, 64];
-
 /// Frames of the camera path.
 pub const CAMERA_FRAMES: usize = 16;
-
-/// The bounded-memory methods (memory that does not grow with the fragments), in table order.
-pub fn bounded_methods() -> Vec<Method> {
-    let mut v = vec![Method::Over];
-    v.extend([1, 2, 3, 4, 8].map(Method::Mlab));
-    v.extend([0, 1, 3, 7].map(Method::Hybrid));
-    v.extend(crate::methods::KCLOSEST_SIZES.map(Method::KClosest));
-    v.extend(Moments::ALL.map(Method::Mboit));
-    v.extend(Weight::ALL.map(Method::Wboit));
-    v.push(Method::BavoilMyers);
-    v.push(Method::Meshkin);
-    v
-}
-
-/// The methods of a peers run: the A-buffer, the bounded ones, AT 4 (which stores every
-/// fragment, as the A-buffer does), and MLAB 4 with f32 rows (the ceiling of MLAB 4's 8-byte
-/// rows: 20 bytes a row, not a candidate of any budget).
-pub fn methods() -> Vec<Method> {
-    let mut v = vec![Method::Reference];
-    v.extend(bounded_methods());
-    v.push(Method::Adaptive(4));
-    v.push(Method::MlabF32(4));
-    v
-}
-
-/// The methods whose camera-motion flicker is measured.
-pub fn flicker_methods() -> Vec<Method> {
-    let mut v = vec![Method::Reference, Method::Over];
-    v.extend([2, 4, 8].map(Method::Mlab));
-    v.extend([1, 3].map(Method::Hybrid));
-    v.extend(crate::methods::KCLOSEST_SIZES.map(Method::KClosest));
-    v.extend(Moments::ALL.map(Method::Mboit));
-    v.push(Method::Wboit(Weight::Eq7));
-    v.push(Method::Adaptive(4));
-    // MLAB 4 with the paper's rounding (no dither): how much of MLAB's flicker is the
-    // default arithmetic's dithered merge.
-    v.push(Method::MlabWith(4, Arith::Paper));
-    v
-}
 
 /// Frame `frame` of the seeded camera path of `scene` at `size` (see the module).
 pub fn camera_stream(scene: Scene, (w, h): (u32, u32), seed: u64, frame: usize) -> Stream {
@@ -198,7 +157,7 @@ fn flip_spread(r: &MethodRun) -> String {
 
 /// The bounded methods of `sc` that fit `budget` B/px.
 fn within(sc: &SceneStability, budget: usize) -> Vec<&MethodRun> {
-    let bounded = bounded_methods();
+    let bounded = catalog::bounded();
     sc.runs
         .iter()
         .filter(|r| bounded.contains(&r.method) && r.bytes <= budget as f64 + 1e-9)
@@ -380,7 +339,7 @@ pub struct PeersPlan {
 /// `oit-lab peers`: the budget tables, the verdicts and the camera flicker; prints Markdown.
 pub fn command(plan: &PeersPlan, scenes: &[Scene]) -> Result<(), String> {
     let start = Instant::now();
-    let all = methods();
+    let all = catalog::peers();
     let splan = Plan {
         size: plan.size,
         seeds: plan.seeds.clone(),
@@ -401,7 +360,7 @@ pub fn command(plan: &PeersPlan, scenes: &[Scene]) -> Result<(), String> {
         results.push(r);
         if plan.camera {
             pb.set_message(format!("{} camera path", sc.name()));
-            flicker.push((sc, camera_flicker(sc, plan.size, plan.seeds[0], &flicker_methods())?));
+            flicker.push((sc, camera_flicker(sc, plan.size, plan.seeds[0], &catalog::flicker())?));
             pb.inc(1);
         }
     }

@@ -2,8 +2,9 @@
 //! and the Markdown tables.
 
 use crate::figure::{Figures, write_pictures};
+use crate::methods::catalog::{self, BUDGETS, HT_SIZES, MLAB_SIZES};
 use crate::methods::depth::{Depth, depth};
-use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method};
+use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{Scorer, Scores, score};
 use crate::out::table::{COVERED_NOTE, HT_NOTE, num, progress_bar};
 use crate::scenes::Scene;
@@ -215,7 +216,7 @@ pub fn vis_bias_where(e: &Evaluation, min_frags: u32) -> Vec<(String, f64, usize
 }
 
 /// The main job (`oit-lab run`): every scene of `scenes` at `size` with every method of
-/// [`Method::standard_list`]; writes the PNGs and figures under `out` when `pngs`
+/// [`catalog::main_job`]; writes the PNGs and figures under `out` when `pngs`
 /// ([`Figures`]), prints the Markdown tables.
 pub fn run_command(
     size: (u32, u32),
@@ -226,7 +227,7 @@ pub fn run_command(
     pngs: bool,
 ) -> Result<(), String> {
     let start = Instant::now();
-    let methods = Method::standard_list();
+    let methods = catalog::main_job();
     let pb = progress_bar((scenes.len() * (methods.len() + 1)) as u64);
     let mut evals = Vec::new();
     let mut figures = Figures::new(size);
@@ -294,12 +295,13 @@ pub fn run_command(
     Ok(())
 }
 
-/// `oit-lab evaluate`: every method of [`Method::standard_list`] against the A-buffer on the
+/// `oit-lab evaluate`: every method of [`catalog::main_job`] against the A-buffer on the
 /// fragment dump `file` (images written to `out` if given), then the smallest MLAB `M` and
 /// HT `K` reaching `psnr_target` dB (and a mean FLIP at or below `flip_target`) on the
-/// covered pixels, the smallest of every bounded-memory method ([`crate::peers::bounded_methods`],
-/// and MLAB and HT at every size of [`MLAB_SIZES`] and [`HT_SIZES`]) reaching it, and the best bounded-memory method within each budget of
-/// [`crate::peers::BUDGETS`].
+/// covered pixels, the smallest bounded-memory method reaching it
+/// ([`catalog::evaluate_candidates`]: the bounded ones, and MLAB and HT at every size of
+/// [`MLAB_SIZES`] and [`HT_SIZES`]), and the best bounded-memory method within each budget of
+/// [`BUDGETS`].
 pub fn evaluate_command(
     file: &str,
     psnr_target: f64,
@@ -308,7 +310,7 @@ pub fn evaluate_command(
     with_flip: bool,
 ) -> Result<(), String> {
     let stream = crate::dump::read(Path::new(&file)).map_err(|e| e.to_string())?;
-    let methods = Method::standard_list();
+    let methods = catalog::main_job();
     let pb = progress_bar(methods.len() as u64 + 1);
     let name = Path::new(&file)
         .file_name()
@@ -400,18 +402,8 @@ pub fn evaluate_command(
     }
     // Every bounded-memory method (issue 25; MLAB and HT at every size the lab has): the
     // smallest reaching the goal, and the best within each budget.
-    let mut candidates = crate::peers::bounded_methods();
-    for m in MLAB_SIZES
-        .map(Method::Mlab)
-        .into_iter()
-        .chain(HT_SIZES.map(Method::Hybrid))
-    {
-        if !candidates.contains(&m) {
-            candidates.push(m);
-        }
-    }
     let mut scored = Vec::new();
-    for m in candidates {
+    for m in catalog::evaluate_candidates() {
         let img = m.render(&binned)?;
         let q = score(&e.reference.image, &img, &e.covered, with_flip);
         let ok = q.covered.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f));
@@ -428,7 +420,7 @@ pub fn evaluate_command(
     }
     println!("\nBest bounded-memory method per budget (covered pixels):\n");
     println!("| budget B/px | best by PSNR | best by FLIP |\n|---:|---|---|");
-    for budget in crate::peers::BUDGETS {
+    for budget in BUDGETS {
         let fit: Vec<_> = scored.iter().filter(|x| x.1 <= budget).collect();
         let by_psnr = fit.iter().max_by(|a, b| a.2.total_cmp(&b.2));
         let by_flip = fit

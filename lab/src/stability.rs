@@ -14,8 +14,9 @@
 //! sums are integers), and so is MLAB when it has at least as many rows as a pixel has
 //! fragments (no merge happens): both come out with zero change (tests/stability.rs).
 
+use crate::methods::catalog::{self, HT_SIZES, MLAB_SIZES};
 use crate::methods::depth::{Depth, depth};
-use crate::methods::{BinnedStream, HT_SIZES, Image, MLAB_SIZES, Method, Weight};
+use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{Change, Scorer, change, srgb8};
 use crate::out::table::{HT_NOTE, median, min_med_max, progress_bar, spread};
 use crate::picture::create_dir;
@@ -37,30 +38,6 @@ pub fn order(prims: &Primitives, seed: u64, order: usize) -> Primitives {
     p
 }
 
-/// The methods of a stability run: the A-buffer itself (its change between orders is 0 unless
-/// two fragments of a pixel share a depth), unsorted OVER, MLAB at every row count the lab
-/// has, HT at every head size, AT 4, WBOIT eq. 7 and Meshkin.
-pub fn methods() -> Vec<Method> {
-    let mut v = vec![Method::Reference, Method::Over];
-    v.extend(MLAB_SIZES.map(Method::Mlab));
-    v.extend(HT_SIZES.map(Method::Hybrid));
-    v.push(Method::Adaptive(4));
-    v.push(Method::Wboit(Weight::Eq7));
-    v.push(Method::Meshkin);
-    v
-}
-
-/// The methods of the printed stability table (the others are in the recommendation).
-pub fn table_methods() -> Vec<Method> {
-    let mut v = vec![Method::Reference, Method::Over];
-    v.extend([1, 2, 4, 8, 16].map(Method::Mlab));
-    v.extend([0, 1, 3, 7].map(Method::Hybrid));
-    v.push(Method::Adaptive(4));
-    v.push(Method::Wboit(Weight::Eq7));
-    v.push(Method::Meshkin);
-    v
-}
-
 /// What a run does.
 #[derive(Clone, Debug)]
 pub struct Plan {
@@ -70,7 +47,7 @@ pub struct Plan {
     pub seeds: Vec<u64>,
     /// Number of orders per seed (order 0 and `orders - 1` shuffles).
     pub orders: usize,
-    /// Methods (see [`methods`]); `Method::Reference` may be among them.
+    /// Methods (see [`catalog::stability`]); `Method::Reference` may be among them.
     pub methods: Vec<Method>,
     /// Compute FLIP (against the reference and between orders).
     pub with_flip: bool,
@@ -601,7 +578,7 @@ pub fn command(plan: &Plan, scenes: &[Scene], out: &Path) -> Result<(), String> 
     );
     println!(
         "## Quality over seeds and orders, change between orders\n\n{}",
-        table(&results, &table_methods())
+        table(&results, &catalog::stability_table())
     );
     if with_flip {
         println!(

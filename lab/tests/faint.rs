@@ -299,7 +299,7 @@ fn spread_prints_median_min_max() {
 
 #[test]
 fn report_has_every_scene_and_method() {
-    let methods = oit_lab::faint::methods();
+    let methods = oit_lab::methods::catalog::faint();
     // OVER, then MLAB 1, 2, 4, 8 and HT 0, 1, 3, 7, each with both arithmetics.
     assert_eq!(methods.len(), 17);
     assert_eq!(

@@ -327,7 +327,7 @@ fn mlab_transmittance_stalls_in_8_bits() {
 fn every_standard_method_renders_a_small_scene() {
     let s = oit_lab::scenes::Scene::Glass.generate(32, 18, 7);
     let f = BinnedStream::new(&s);
-    for m in Method::standard_list() {
+    for m in oit_lab::methods::catalog::main_job() {
         let img = m.render(&f).unwrap();
         assert_eq!(img.rgb.len(), 32 * 18, "{}", m.name());
         // Meshkin's background weight is 1 - sum(a), negative past full opacity (seed 003).

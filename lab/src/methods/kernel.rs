@@ -3,7 +3,8 @@
 //! the dithers hold still under camera motion), and the lab's [`Arith`] (which the `*_with` functions, here and in
 //! [`super::lanes`], turn into the kernel's arithmetic type).
 
-use super::{BinnedStream, HT_SIZES, Image, MLAB_SIZES};
+use super::catalog::{HT_SIZES, MLAB_SIZES};
+use super::{BinnedStream, Image};
 use mlab::glam::Vec3;
 use mlab::{
     Arithmetic, Fragment, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased,
