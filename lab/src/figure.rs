@@ -4,7 +4,7 @@
 //! every image, difference and FLIP map.
 
 use crate::methods::Method;
-use crate::picture::{Cell, FigureRow, INSET_ZOOM, Picture, counts_picture, create_dir, densest, labelled_figure};
+use crate::out::picture::{Cell, FigureRow, INSET_ZOOM, Picture, counts_picture, create_dir, densest, labelled_figure};
 use crate::report::Evaluation;
 use std::path::Path;
 

@@ -10,7 +10,8 @@
 //!   whole image and over the covered pixels.
 //! - [`faint`]: `oit-lab faint` (issue 9): many faint or dense layers, both kernel
 //!   arithmetics, HT tail sums and saturation.
-//! - [`picture`]: PNGs and the Figure 3 grid; [`figure`]: what the main job's figures show;
+//! - [`out::picture`]: PNGs and the Figure 3 grid (with the 5x7 font of its labels);
+//!   [`figure`]: what the main job's figures show;
 //!   [`dump`]: the fragment dump format and `oit-lab dump`.
 //! - [`report`]: the whole evaluation of one stream, its tables, the main job (`oit-lab run`)
 //!   and `oit-lab evaluate`.
@@ -20,7 +21,6 @@
 //!   spreads of the quality and the change between orders.
 //! - [`out`]: what the commands write: the tables' shared pieces ([`out::table`]: number
 //!   formats, the median, the notes under the tables, the progress bar).
-//! - [`font`]: the 5x7 bitmap font of the figures' labels.
 //! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.
 //! - [`tiled`]: whole frames on every core: primitives binned into bands and tiles and
 //!   rasterized straight into each worker's tile-sized target (`rayon`), MLAB and the
@@ -32,12 +32,10 @@ pub mod bench;
 pub mod dump;
 pub mod faint;
 pub mod figure;
-pub mod font;
 pub mod methods;
 pub mod metrics;
 pub mod out;
 pub mod peers;
-pub mod picture;
 pub mod report;
 pub mod scenes;
 pub mod stability;

@@ -18,8 +18,8 @@ use crate::methods::catalog::{self, HT_SIZES, MLAB_SIZES};
 use crate::methods::depth::{Depth, depth};
 use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{Change, Scorer, change, srgb8};
+use crate::out::picture::create_dir;
 use crate::out::table::{HT_NOTE, median, min_med_max, progress_bar, spread};
-use crate::picture::create_dir;
 use crate::scenes::{Primitives, Rng, Scene};
 use std::path::Path;
 use std::sync::Mutex;
@@ -471,9 +471,8 @@ pub const STRIP_SPREAD_LEVELS: u8 = 16;
 /// seed, side by side at full size, then the per-pixel spread over all that seed's orders as a
 /// heat map (nv-flip's magma, 0 to [`STRIP_SPREAD_LEVELS`] levels of the displayed 8-bit sRGB
 /// value, largest channel; uncovered pixels grey), each labelled.
-pub fn strip_picture(scene: Scene, seed: u64, strip: &Strip) -> crate::picture::Picture {
-    use crate::font::{LINE, draw_text};
-    use crate::picture::Picture;
+pub fn strip_picture(scene: Scene, seed: u64, strip: &Strip) -> crate::out::picture::Picture {
+    use crate::out::picture::{LINE, Picture, draw_text};
     let Some((_, first)) = strip.images.first() else {
         return Picture::filled(1, 1, [255; 3]);
     };
