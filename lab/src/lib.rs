@@ -13,8 +13,8 @@
 //! - [`out::picture`]: PNGs and the Figure 3 grid (with the 5x7 font of its labels);
 //!   [`figure`]: what the main job's figures show;
 //!   [`dump`]: the fragment dump format and `oit-lab dump`.
-//! - [`report`]: the whole evaluation of one stream, its tables, the main job (`oit-lab run`)
-//!   and `oit-lab evaluate`.
+//! - [`study`]: the studies. [`study::evaluate`]: the whole evaluation of one stream and its
+//!   tables; [`study::run`]: the main job (`oit-lab run`) and `oit-lab evaluate`.
 //! - [`peers`]: `oit-lab peers` (issue 25), MLAB against the bounded-memory methods by memory
 //!   budget, with the flicker of each under a moving camera.
 //! - [`stability`]: `oit-lab stability`, every scene in several primitive orders and seeds:
@@ -36,8 +36,8 @@ pub mod methods;
 pub mod metrics;
 pub mod out;
 pub mod peers;
-pub mod report;
 pub mod scenes;
 pub mod stability;
 pub mod stream;
+pub mod study;
 pub mod tiled;

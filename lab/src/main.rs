@@ -1,12 +1,13 @@
 //! oit-lab: the command line. See `oit-lab --help`.
 
-//! Every command's work is in the library (`oit_lab::report::run_command`, ...); this file
+//! Every command's work is in the library (`oit_lab::study::run::run_command`, ...); this file
 //! parses the arguments and dispatches.
 
 use oit_lab::methods::{Arith, catalog};
 use oit_lab::scenes::Scene;
+use oit_lab::study::run;
 use oit_lab::tiled::TileSize;
-use oit_lab::{bench, dump, faint, peers, report, stability};
+use oit_lab::{bench, dump, faint, peers, stability};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -379,7 +380,7 @@ fn cmd_run(mut a: Args) -> Result<(), Fail> {
     let with_flip = !a.flag(&["--no-flip"]);
     let pngs = !a.flag(&["--no-png"]);
     a.finish()?;
-    report::run_command(size, seed, &scenes, &out, with_flip, pngs).map_err(runtime)
+    run::run_command(size, seed, &scenes, &out, with_flip, pngs).map_err(runtime)
 }
 
 fn cmd_bench(mut a: Args) -> Result<(), Fail> {
@@ -557,5 +558,5 @@ fn cmd_evaluate(mut a: Args) -> Result<(), Fail> {
     };
     let out = a.value("--out")?.map(PathBuf::from);
     let with_flip = !a.flag(&["--no-flip"]) || flip_target.is_some();
-    report::evaluate_command(&file, psnr_target, flip_target, out.as_deref(), with_flip).map_err(runtime)
+    run::evaluate_command(&file, psnr_target, flip_target, out.as_deref(), with_flip).map_err(runtime)
 }
