@@ -11,7 +11,7 @@
 //! - [`faint`]: `oit-lab faint` (issue 9): many faint or dense layers, both kernel
 //!   arithmetics, HT tail sums and saturation.
 //! - [`out::picture`]: PNGs and the Figure 3 grid (with the 5x7 font of its labels);
-//!   [`figure`]: what the main job's figures show;
+//!   [`out::figure`]: what the main job's figures show;
 //!   [`dump`]: the fragment dump format and `oit-lab dump`.
 //! - [`study`]: the studies. [`study::evaluate`]: the whole evaluation of one stream and its
 //!   tables; [`study::run`]: the main job (`oit-lab run`) and `oit-lab evaluate`.
@@ -31,7 +31,6 @@
 pub mod bench;
 pub mod dump;
 pub mod faint;
-pub mod figure;
 pub mod methods;
 pub mod metrics;
 pub mod out;

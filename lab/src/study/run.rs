@@ -2,10 +2,10 @@
 //! and `oit-lab evaluate` (the same comparison on a fragment dump, then the smallest and the
 //! best bounded-memory methods).
 use super::evaluate::{evaluate, full_table, summary_table, vis_bias_where};
-use crate::figure::{Figures, write_pictures};
 use crate::methods::catalog::{self, BUDGETS, HT_SIZES, MLAB_SIZES};
 use crate::methods::{BinnedStream, Method};
 use crate::metrics::score;
+use crate::out::figure::{Figures, write_pictures};
 use crate::out::table::{HT_NOTE, num, progress_bar};
 use crate::scenes::Scene;
 use std::path::Path;
