@@ -17,8 +17,9 @@
 //!   tables; [`study::run`]: the main job (`oit-lab run`) and `oit-lab evaluate`.
 //! - [`peers`]: `oit-lab peers` (issue 25), MLAB against the bounded-memory methods by memory
 //!   budget, with the flicker of each under a moving camera.
-//! - [`stability`]: `oit-lab stability`, every scene in several primitive orders and seeds:
-//!   spreads of the quality and the change between orders.
+//! - [`study::sweep`]: every scene in several primitive orders and seeds (the engine of
+//!   stability and peers); [`study::stability`]: `oit-lab stability`, spreads of the quality
+//!   and the change between orders.
 //! - [`out`]: what the commands write: the tables' shared pieces ([`out::table`]: number
 //!   formats, the median, the notes under the tables, the progress bar).
 //! - [`bench`]: `oit-lab bench`, frame timings and the scaling plot.
@@ -36,7 +37,6 @@ pub mod metrics;
 pub mod out;
 pub mod peers;
 pub mod scenes;
-pub mod stability;
 pub mod stream;
 pub mod study;
 pub mod tiled;

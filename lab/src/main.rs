@@ -5,9 +5,9 @@
 
 use oit_lab::methods::{Arith, catalog};
 use oit_lab::scenes::Scene;
-use oit_lab::study::run;
+use oit_lab::study::{run, stability, sweep};
 use oit_lab::tiled::TileSize;
-use oit_lab::{bench, dump, faint, peers, stability};
+use oit_lab::{bench, dump, faint, peers};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -495,7 +495,7 @@ fn cmd_stability(mut a: Args) -> Result<(), Fail> {
     let with_flip = !a.flag(&["--no-flip"]);
     let pngs = !a.flag(&["--no-png"]);
     a.finish()?;
-    let plan = stability::Plan {
+    let plan = sweep::Plan {
         size,
         seeds,
         orders,

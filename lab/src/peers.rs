@@ -2,7 +2,7 @@
 //! today (moment-based OIT, K-closest layered OIT, HT, WBOIT, ...) by memory budget, over
 //! several scene seeds and primitive orders, and the flicker of each under a moving camera.
 //!
-//! - **Budgets**: every scene is run as `oit-lab stability` runs it ([`stability::run_scene`]:
+//! - **Budgets**: every scene is run as `oit-lab stability` runs it ([`sweep::run_scene`]:
 //!   seeds x primitive orders, each image scored on the covered pixels against the A-buffer of
 //!   the same stream); per budget (8, 16, 32, 64 B/px) the method of the best median PSNR and
 //!   the one of the best median FLIP among those that fit ([`budget_table`]), and the verdict
@@ -24,8 +24,8 @@ use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{CHANGE_LEVELS, srgb8};
 use crate::out::table::{median, progress_bar, spread};
 use crate::scenes::{Rng, Scene};
-use crate::stability::{self, MethodRun, Plan, SceneStability};
 use crate::stream::{Frag, Stream};
+use crate::study::sweep::{self, MethodRun, Plan, SceneStability};
 use std::time::Instant;
 
 /// Frames of the camera path.
@@ -353,7 +353,7 @@ pub fn command(plan: &PeersPlan, scenes: &[Scene]) -> Result<(), String> {
     let mut results = Vec::new();
     let mut flicker = Vec::new();
     for &sc in scenes {
-        let r = stability::run_scene(sc, &splan, |seed, o| {
+        let r = sweep::run_scene(sc, &splan, |seed, o| {
             pb.set_message(format!("{} seed {seed} order {o}", sc.name()));
             pb.inc(1);
         })?;
@@ -393,7 +393,7 @@ pub fn command(plan: &PeersPlan, scenes: &[Scene]) -> Result<(), String> {
     }
     println!(
         "## Every method (covered PSNR and FLIP over seeds and orders)\n\n{}",
-        stability::table(&results, &all)
+        sweep::table(&results, &all)
     );
     Ok(())
 }

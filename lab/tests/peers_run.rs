@@ -5,7 +5,7 @@ use oit_lab::methods::catalog::bounded;
 use oit_lab::out::table::median;
 use oit_lab::peers::{CAMERA_FRAMES, best_within, camera_flicker, camera_stream};
 use oit_lab::scenes::Scene;
-use oit_lab::stability::{Plan, run_scene};
+use oit_lab::study::sweep::{Plan, run_scene};
 
 #[test]
 fn camera_path_starts_at_the_scene_and_moves() {

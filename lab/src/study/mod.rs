@@ -1,5 +1,9 @@
-//! The studies: the evaluation of one stream against the reference ([`evaluate`]) and the
-//! commands built on it ([`run`]).
+//! The studies: two engines, the evaluation of one stream against the reference
+//! ([`evaluate`]) and seeds x primitive orders ([`sweep`]), and the commands built on them
+//! ([`run`], [`stability`]). A command imports the engines, `methods/` and `out/`, never
+//! another command.
 
 pub mod evaluate;
 pub mod run;
+pub mod stability;
+pub mod sweep;
