@@ -3,11 +3,11 @@
 //! Every command's work is in the library (`oit_lab::study::run::run_command`, ...); this file
 //! parses the arguments and dispatches.
 
+use oit_lab::dump;
 use oit_lab::methods::{Arith, catalog};
 use oit_lab::scenes::Scene;
-use oit_lab::study::{run, stability, sweep};
+use oit_lab::study::{bench, faint, peers, run, stability, sweep};
 use oit_lab::tiled::TileSize;
-use oit_lab::{bench, dump, faint, peers};
 use std::path::PathBuf;
 use std::process::ExitCode;
 

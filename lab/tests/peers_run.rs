@@ -3,8 +3,8 @@
 use oit_lab::methods::Method;
 use oit_lab::methods::catalog::bounded;
 use oit_lab::out::table::median;
-use oit_lab::peers::{CAMERA_FRAMES, best_within, camera_flicker, camera_stream};
 use oit_lab::scenes::Scene;
+use oit_lab::study::peers::{CAMERA_FRAMES, best_within, camera_flicker, camera_stream};
 use oit_lab::study::sweep::{Plan, run_scene};
 
 #[test]

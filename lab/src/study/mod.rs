@@ -1,9 +1,12 @@
 //! The studies: two engines, the evaluation of one stream against the reference
 //! ([`evaluate`]) and seeds x primitive orders ([`sweep`]), and the commands built on them
-//! ([`run`], [`stability`]). A command imports the engines, `methods/` and `out/`, never
+//! ([`run`], [`faint`], [`stability`], [`peers`], [`bench`](mod@bench)). A command imports the engines, `methods/` and `out/`, never
 //! another command.
 
+pub mod bench;
 pub mod evaluate;
+pub mod faint;
+pub mod peers;
 pub mod run;
 pub mod stability;
 pub mod sweep;
