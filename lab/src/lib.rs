@@ -12,7 +12,7 @@
 //!   arithmetics, HT tail sums and saturation.
 //! - [`out::picture`]: PNGs and the Figure 3 grid (with the 5x7 font of its labels);
 //!   [`out::figure`]: what the main job's figures show;
-//!   [`dump`]: the fragment dump format and `oit-lab dump`.
+//!   [`dump`]: the fragment dump format (`oit-lab dump` is [`study::dump`]).
 //! - [`study`]: the studies. [`study::evaluate`]: the whole evaluation of one stream and its
 //!   tables; [`study::run`]: the main job (`oit-lab run`) and `oit-lab evaluate`.
 //! - [`study::peers`]: `oit-lab peers` (issue 25), MLAB against the bounded-memory methods by memory

@@ -3,10 +3,9 @@
 //! Every command's work is in the library (`oit_lab::study::run::run_command`, ...); this file
 //! parses the arguments and dispatches.
 
-use oit_lab::dump;
 use oit_lab::methods::{Arith, catalog};
 use oit_lab::scenes::Scene;
-use oit_lab::study::{bench, faint, peers, run, stability, sweep};
+use oit_lab::study::{bench, dump, faint, peers, run, stability, sweep};
 use oit_lab::tiled::TileSize;
 use std::path::PathBuf;
 use std::process::ExitCode;
