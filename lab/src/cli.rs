@@ -358,7 +358,7 @@ pub fn cmd_bench(mut a: Args) -> Result<(), Fail> {
     let one = a.value("--one")?;
     let svg = a.value("--svg")?.map(PathBuf::from);
     a.finish()?;
-    let plan = bench::Plan {
+    let plan = bench::BenchPlan {
         warmup,
         reps,
         threads,

@@ -12,7 +12,7 @@ mod timing;
 
 pub use tables::{band_table, scaling_svg, tables};
 pub use timing::{
-    Measure, Plan, Timing, What, measure, peak_rss, pool, process_cpu_seconds, threads_cpu_seconds, time,
+    BenchPlan, Measure, Timing, What, measure, peak_rss, pool, process_cpu_seconds, threads_cpu_seconds, time,
 };
 
 use crate::scenes::Scene;
@@ -26,7 +26,7 @@ pub fn measure_in_child(
     scene: Scene,
     what: What,
     threads: usize,
-    plan: &Plan,
+    plan: &BenchPlan,
 ) -> Result<Measure, String> {
     let out = std::process::Command::new(exe)
         .args([
@@ -66,12 +66,12 @@ pub fn measure_in_child(
 pub fn run(
     exe: &std::path::Path,
     scenes: &[Scene],
-    plan: &Plan,
+    plan: &BenchPlan,
     tiles: &[TileSize],
     mut log: impl FnMut(&Measure),
 ) -> Result<Vec<Measure>, String> {
     let mut all = Vec::new();
-    let mut go = |scene, what, threads, plan: &Plan, all: &mut Vec<Measure>| -> Result<(), String> {
+    let mut go = |scene, what, threads, plan: &BenchPlan, all: &mut Vec<Measure>| -> Result<(), String> {
         let m = measure_in_child(exe, scene, what, threads, plan)?;
         log(&m);
         all.push(m);
@@ -88,7 +88,7 @@ pub fn run(
         }
         let tmax = plan.threads.iter().copied().max().unwrap_or(1);
         for &tile in tiles.iter().filter(|&&t| t != plan.tile) {
-            let p = Plan { tile, ..plan.clone() };
+            let p = BenchPlan { tile, ..plan.clone() };
             let mut ts = vec![1, tmax];
             ts.dedup();
             for t in ts {
@@ -102,8 +102,8 @@ pub fn run(
 /// `oit-lab bench`: every scene of `scenes` with every method and thread count of `plan`
 /// (and MLAB 4 at the tile sizes `tiles`), each configuration in a child process of this
 /// program ([`measure_in_child`]); prints the tables and writes the scaling plot to `svg`.
-pub fn command(plan: &Plan, scenes: &[Scene], tiles: &[TileSize], svg: Option<&Path>) -> Result<(), String> {
-    let Plan {
+pub fn command(plan: &BenchPlan, scenes: &[Scene], tiles: &[TileSize], svg: Option<&Path>) -> Result<(), String> {
+    let BenchPlan {
         warmup,
         reps,
         ref threads,
@@ -160,7 +160,7 @@ pub fn command(plan: &Plan, scenes: &[Scene], tiles: &[TileSize], svg: Option<&P
 
 /// `oit-lab bench --one`: measure one configuration in this process ([`measure`]) and print
 /// its line for the parent.
-pub fn child_command(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<(), String> {
+pub fn child_command(scene: Scene, what: What, threads: usize, plan: &BenchPlan) -> Result<(), String> {
     let m = measure(scene, what, threads.max(1), plan)?;
     println!("{}", m.to_line());
     Ok(())

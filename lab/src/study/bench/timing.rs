@@ -8,7 +8,7 @@ use std::time::Instant;
 
 /// What to measure.
 #[derive(Clone, Debug)]
-pub struct Plan {
+pub struct BenchPlan {
     /// Untimed runs before measuring.
     pub warmup: usize,
     /// Timed runs; the median is reported.
@@ -296,7 +296,7 @@ pub fn peak_rss() -> u64 {
 }
 
 /// Measure one configuration in this process (the child's work).
-pub fn measure(scene: Scene, what: What, threads: usize, plan: &Plan) -> Result<Measure, String> {
+pub fn measure(scene: Scene, what: What, threads: usize, plan: &BenchPlan) -> Result<Measure, String> {
     let (w, h) = plan.size;
     let prims = scene.primitives(w, h, plan.seed);
     let mut out = vec![[0u8; 4]; w as usize * h as usize];
