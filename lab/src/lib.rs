@@ -33,6 +33,7 @@ pub mod dump;
 pub mod methods;
 pub mod metrics;
 pub mod out;
+pub mod par;
 pub mod scenes;
 pub mod stream;
 pub mod study;

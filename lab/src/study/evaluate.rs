@@ -5,6 +5,7 @@ use crate::methods::depth::{Depth, depth};
 use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{Scorer, Scores, score};
 use crate::out::table::{COVERED_NOTE, HT_NOTE, num};
+use crate::par;
 use crate::stream::Stream;
 use std::time::Instant;
 
@@ -78,26 +79,10 @@ pub fn evaluate(
         rendered.push((m, image, ms));
         tick(&m.name());
     }
-    let queue = std::sync::Mutex::new((0..rendered.len()).rev().collect::<Vec<_>>());
-    let results = std::sync::Mutex::new(vec![None; rendered.len()]);
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
     let scorer = Scorer::new(&reference.image, &covered);
-    std::thread::scope(|s| {
-        for _ in 0..threads {
-            s.spawn(|| {
-                while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                    let q = scorer.score(&rendered[i].1, with_flip);
-                    if let Ok(mut r) = results.lock() {
-                        r[i] = Some(q);
-                    }
-                }
-            });
-        }
-    });
-    let results = results.into_inner().map_err(|_| "metrics thread failed".to_string())?;
+    let results = par::map(rendered.len(), |i| scorer.score(&rendered[i].1, with_flip))?;
     let mut entries = Vec::with_capacity(methods.len());
-    for ((m, image, ms), q) in rendered.into_iter().zip(results) {
-        let scores = q.ok_or("metrics thread failed")?;
+    for ((m, image, ms), scores) in rendered.into_iter().zip(results) {
         entries.push(Entry {
             method: m,
             bytes: m.bytes_per_pixel(&binned),

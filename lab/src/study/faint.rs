@@ -6,9 +6,9 @@ use crate::methods::depth::{Depth, depth};
 use crate::methods::{Arith, BinnedStream, Image, Method, catalog, hybrid_with};
 use crate::metrics::{Covered, Quality, compare, compare_covered};
 use crate::out::table::{HT_NOTE, spread};
+use crate::par;
 use crate::scenes::Scene;
 use crate::stream::Stream;
-use std::sync::Mutex;
 use std::time::Instant;
 
 /// Exact (unsaturated) tail sums of one pixel, in units of 1/255: the sums HT's tail would
@@ -176,29 +176,11 @@ pub fn run_stream(
     let binned = BinnedStream::new(stream);
     let reference = Method::Reference.render(&binned)?;
     let covered: Vec<bool> = binned.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
-    let queue = Mutex::new((0..methods.len()).rev().collect::<Vec<_>>());
-    let results = Mutex::new(vec![None; methods.len()]);
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
-    std::thread::scope(|s| {
-        for _ in 0..threads.min(methods.len()) {
-            s.spawn(|| {
-                while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                    let m = methods[i];
-                    let r = measure(&binned, &reference, &covered, m, with_flip);
-                    if let Ok(mut out) = results.lock() {
-                        out[i] = Some(r);
-                    }
-                }
-            });
-        }
-    });
-    let results = results
-        .into_inner()
-        .map_err(|_| "a measuring thread failed".to_string())?;
-    let mut measures = Vec::with_capacity(methods.len());
-    for r in results {
-        measures.push(r.ok_or("a measuring thread failed")??);
-    }
+    let measures = par::map(methods.len(), |i| {
+        measure(&binned, &reference, &covered, methods[i], with_flip)
+    })?
+    .into_iter()
+    .collect::<Result<Vec<_>, _>>()?;
     Ok(SceneRun {
         scene,
         seed,
