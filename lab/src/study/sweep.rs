@@ -20,8 +20,8 @@ use crate::methods::depth::{Depth, depth};
 use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{Change, Scorer, change, srgb8};
 use crate::out::table::{HT_NOTE, median, min_med_max};
+use crate::par;
 use crate::scenes::{Primitives, Rng, Scene};
-use std::sync::Mutex;
 
 /// The primitives of `prims` in submission order number `order`: order 0 is the list as
 /// built, any other order a Fisher-Yates shuffle seeded from the scene seed and the order.
@@ -124,9 +124,6 @@ pub struct SceneStability {
     pub strip: Option<Strip>,
 }
 
-/// A method's image and scores in one order, or why it could not be rendered.
-type Rendered = Option<Result<(Image, Sample), String>>;
-
 /// Per method and seed: the previous order's image, and the running min and max of the
 /// displayed 8-bit values per pixel and channel.
 struct Track {
@@ -135,168 +132,61 @@ struct Track {
     hi: Vec<[u8; 3]>,
 }
 
-/// Run `plan` on `scene`. `progress` is called after each order with `(seed, order)`.
-pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)) -> Result<SceneStability, String> {
-    let (w, h) = plan.size;
-    let n = w as usize * h as usize;
-    let mut runs: Vec<MethodRun> = plan
-        .methods
-        .iter()
-        .map(|&m| MethodRun {
-            method: m,
+impl Track {
+    fn new(pixels: usize) -> Track {
+        Track {
+            prev: None,
+            lo: vec![[255; 3]; pixels],
+            hi: vec![[0; 3]; pixels],
+        }
+    }
+
+    /// Per pixel, the spread of the displayed 8-bit values over the orders seen (levels,
+    /// largest channel).
+    fn levels(&self) -> Vec<u8> {
+        (0..self.lo.len())
+            .map(|p| {
+                (0..3)
+                    .map(|k| self.hi[p][k].saturating_sub(self.lo[p][k]))
+                    .max()
+                    .unwrap_or(0)
+            })
+            .collect()
+    }
+}
+
+impl MethodRun {
+    fn new(method: Method) -> MethodRun {
+        MethodRun {
+            method,
             bytes: 0.0,
             samples: Vec::new(),
             pairs: Vec::new(),
             spread_share: Vec::new(),
             spread_max: 0,
             identical: true,
-        })
-        .collect();
-    let mut depths = Vec::new();
-    let mut fragments = Vec::new();
-    let mut strip = None;
-    for (si, &seed) in plan.seeds.iter().enumerate() {
-        let built = scene.primitives(w, h, seed);
-        let mut tracks: Vec<Track> = plan
-            .methods
-            .iter()
-            .map(|_| Track {
-                prev: None,
-                lo: vec![[255; 3]; n],
-                hi: vec![[0; 3]; n],
-            })
-            .collect();
-        let mut covered = Vec::new();
-        let mut strip_images = Vec::new();
-        for o in 0..plan.orders.max(1) {
-            let stream = order(&built, seed, o).stream();
-            stream
-                .validate()
-                .map_err(|(i, e)| format!("{} seed {seed} order {o}: fragment {i}: {e}", scene.name()))?;
-            let binned = BinnedStream::new(&stream);
-            if o == 0 {
-                covered = binned.bins.start.windows(2).map(|x| x[1] > x[0]).collect();
-                depths.push(depth(&binned));
-                fragments.push(stream.frags.len());
-            }
-            let reference = Method::Reference.render(&binned)?;
-            let scorer = Scorer::new(&reference, &covered);
-            // Render and score every method, on all cores (the kernel methods are single
-            // threaded), then fold the images into the tracks in method order.
-            let queue = Mutex::new((0..plan.methods.len()).rev().collect::<Vec<_>>());
-            let results: Mutex<Vec<Rendered>> = Mutex::new(vec![None; plan.methods.len()]);
-            let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
-            std::thread::scope(|s| {
-                for _ in 0..threads.min(plan.methods.len()) {
-                    s.spawn(|| {
-                        while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                            let m = plan.methods[i];
-                            let r = (if m == Method::Reference {
-                                Ok(reference.clone())
-                            } else {
-                                m.render(&binned)
-                            })
-                            .map(|img| {
-                                let q = scorer.score(&img, plan.with_flip);
-                                let sample = Sample {
-                                    seed,
-                                    order: o,
-                                    psnr: q.covered.psnr,
-                                    psnr_whole: q.whole.psnr,
-                                    flip: q.flip_covered.unwrap_or(f64::NAN),
-                                    ssim: q.ssim_covered,
-                                };
-                                (img, sample)
-                            });
-                            if let Ok(mut out) = results.lock() {
-                                out[i] = Some(r);
-                            }
-                        }
-                    });
-                }
-            });
-            let results = results
-                .into_inner()
-                .map_err(|_| "a rendering thread failed".to_string())?;
-            // Changes against the previous order, on all cores too (FLIP per pair).
-            let mut images = Vec::with_capacity(results.len());
-            for (i, r) in results.into_iter().enumerate() {
-                let (img, sample) = r.ok_or("a rendering thread failed")??;
-                runs[i].samples.push(sample);
-                runs[i].bytes = plan.methods[i].bytes_per_pixel(&binned);
-                images.push(img);
-            }
-            let changes: Mutex<Vec<Option<Change>>> = Mutex::new(vec![None; images.len()]);
-            let queue = Mutex::new((0..images.len()).rev().collect::<Vec<_>>());
-            std::thread::scope(|s| {
-                for _ in 0..threads.min(images.len()) {
-                    s.spawn(|| {
-                        while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                            if let Some(prev) = &tracks[i].prev {
-                                let flip = plan.with_flip && plan.pair_flip.contains(&plan.methods[i]);
-                                let c = change(prev, &images[i], &covered, flip);
-                                if let Ok(mut out) = changes.lock() {
-                                    out[i] = Some(c);
-                                }
-                            }
-                        }
-                    });
-                }
-            });
-            let changes = changes
-                .into_inner()
-                .map_err(|_| "a comparing thread failed".to_string())?;
-            for (i, img) in images.into_iter().enumerate() {
-                let t = &mut tracks[i];
-                if let Some(c) = changes[i] {
-                    runs[i].pairs.push(c);
-                }
-                if let Some(prev) = &t.prev {
-                    runs[i].identical &= *prev == img;
-                }
-                for ((px, lo), hi) in img.rgb.iter().zip(t.lo.iter_mut()).zip(t.hi.iter_mut()) {
-                    for ((&c, l), h) in px.iter().zip(lo.iter_mut()).zip(hi.iter_mut()) {
-                        let v = srgb8(c);
-                        *l = (*l).min(v);
-                        *h = (*h).max(v);
-                    }
-                }
-                if let Some((m, count)) = plan.strip
-                    && si == 0
-                    && m == plan.methods[i]
-                    && o < count
-                {
-                    strip_images.push((o, img.clone()));
-                }
-                t.prev = Some(img);
-            }
-            progress(seed, o);
         }
-        for (i, t) in tracks.iter().enumerate() {
-            let levels: Vec<u8> = (0..n)
-                .map(|p| (0..3).map(|k| t.hi[p][k].saturating_sub(t.lo[p][k])).max().unwrap_or(0))
-                .collect();
-            let (mut cov, mut moved) = (0usize, 0usize);
-            for p in (0..n).filter(|&p| covered[p]) {
-                cov += 1;
-                moved += usize::from(levels[p] > crate::metrics::CHANGE_LEVELS);
-                runs[i].spread_max = runs[i].spread_max.max(levels[p]);
-            }
-            runs[i]
-                .spread_share
-                .push(if cov > 0 { moved as f64 / cov as f64 } else { 0.0 });
-            if let Some((m, _)) = plan.strip
-                && si == 0
-                && m == plan.methods[i]
-            {
-                strip = Some(Strip {
-                    method: m,
-                    images: std::mem::take(&mut strip_images),
-                    spread: levels,
-                    covered: covered.clone(),
-                    orders: plan.orders.max(1),
-                });
-            }
+    }
+}
+
+/// One seed of a scene: its fragments per covered pixel and fragments (order 0), and the
+/// strip when this seed makes it.
+struct SeedRun {
+    depth: Depth,
+    fragments: usize,
+    strip: Option<Strip>,
+}
+
+/// Run `plan` on `scene`. `progress` is called after each order with `(seed, order)`.
+pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)) -> Result<SceneStability, String> {
+    let mut runs: Vec<MethodRun> = plan.methods.iter().map(|&m| MethodRun::new(m)).collect();
+    let (mut depths, mut fragments, mut strip) = (Vec::new(), Vec::new(), None);
+    for (si, &seed) in plan.seeds.iter().enumerate() {
+        let r = run_seed(scene, plan, seed, si == 0, &mut runs, &mut progress)?;
+        depths.push(r.depth);
+        fragments.push(r.fragments);
+        if r.strip.is_some() {
+            strip = r.strip;
         }
     }
     Ok(SceneStability {
@@ -306,6 +196,155 @@ pub fn run_scene(scene: Scene, plan: &Plan, mut progress: impl FnMut(u64, usize)
         runs,
         strip,
     })
+}
+
+/// Every order of one seed: render and score ([`render_order`]), compare with the previous
+/// order and fold into the tracks ([`fold_order`]), then each method's spread over the orders.
+/// `first` is the first seed (the one of the strip).
+fn run_seed(
+    scene: Scene,
+    plan: &Plan,
+    seed: u64,
+    first: bool,
+    runs: &mut [MethodRun],
+    progress: &mut impl FnMut(u64, usize),
+) -> Result<SeedRun, String> {
+    let (w, h) = plan.size;
+    let n = w as usize * h as usize;
+    let built = scene.primitives(w, h, seed);
+    let mut tracks: Vec<Track> = plan.methods.iter().map(|_| Track::new(n)).collect();
+    let (mut covered, mut depth0, mut fragments) = (Vec::new(), None, 0);
+    let mut strip_images = Vec::new();
+    let strip_method = plan.strip.filter(|_| first);
+    for o in 0..plan.orders.max(1) {
+        let stream = order(&built, seed, o).stream();
+        stream
+            .validate()
+            .map_err(|(i, e)| format!("{} seed {seed} order {o}: fragment {i}: {e}", scene.name()))?;
+        let binned = BinnedStream::new(&stream);
+        if o == 0 {
+            covered = binned.bins.start.windows(2).map(|x| x[1] > x[0]).collect();
+            depth0 = Some(depth(&binned));
+            fragments = stream.frags.len();
+        }
+        let images = render_order(plan, &binned, &covered, seed, o, runs)?;
+        let keep = strip_method.filter(|&(_, count)| o < count).map(|(m, _)| m);
+        for img in fold_order(plan, &covered, images, &mut tracks, runs, keep)? {
+            strip_images.push((o, img));
+        }
+        progress(seed, o);
+    }
+    let mut strip = None;
+    for (i, t) in tracks.iter().enumerate() {
+        let levels = t.levels();
+        let (mut cov, mut moved) = (0usize, 0usize);
+        for p in (0..n).filter(|&p| covered[p]) {
+            cov += 1;
+            moved += usize::from(levels[p] > crate::metrics::CHANGE_LEVELS);
+            runs[i].spread_max = runs[i].spread_max.max(levels[p]);
+        }
+        runs[i]
+            .spread_share
+            .push(if cov > 0 { moved as f64 / cov as f64 } else { 0.0 });
+        if let Some((m, _)) = strip_method
+            && m == plan.methods[i]
+        {
+            strip = Some(Strip {
+                method: m,
+                images: std::mem::take(&mut strip_images),
+                spread: levels,
+                covered: covered.clone(),
+                orders: plan.orders.max(1),
+            });
+        }
+    }
+    Ok(SeedRun {
+        depth: depth0.ok_or("no order rendered")?,
+        fragments,
+        strip,
+    })
+}
+
+/// Render and score every method of `plan` in order `o`, on all cores (the kernel methods are
+/// single threaded); each method's sample and bytes go to its run.
+fn render_order(
+    plan: &Plan,
+    binned: &BinnedStream,
+    covered: &[bool],
+    seed: u64,
+    o: usize,
+    runs: &mut [MethodRun],
+) -> Result<Vec<Image>, String> {
+    let reference = Method::Reference.render(binned)?;
+    let scorer = Scorer::new(&reference, covered);
+    let results = par::map(plan.methods.len(), |i| {
+        let m = plan.methods[i];
+        let img = if m == Method::Reference {
+            reference.clone()
+        } else {
+            m.render(binned)?
+        };
+        let q = scorer.score(&img, plan.with_flip);
+        let sample = Sample {
+            seed,
+            order: o,
+            psnr: q.covered.psnr,
+            psnr_whole: q.whole.psnr,
+            flip: q.flip_covered.unwrap_or(f64::NAN),
+            ssim: q.ssim_covered,
+        };
+        Ok::<_, String>((img, sample))
+    })?;
+    let mut images = Vec::with_capacity(results.len());
+    for (i, r) in results.into_iter().enumerate() {
+        let (img, sample) = r?;
+        runs[i].samples.push(sample);
+        runs[i].bytes = plan.methods[i].bytes_per_pixel(binned);
+        images.push(img);
+    }
+    Ok(images)
+}
+
+/// Compare each method's image with its previous order's (on all cores, FLIP per pair for the
+/// methods of `plan.pair_flip`) and fold it into the method's track: the change, whether it is
+/// bit-identical, the per-pixel range of the displayed values. Returns a copy of the images of
+/// the method `keep` (the strip's).
+fn fold_order(
+    plan: &Plan,
+    covered: &[bool],
+    images: Vec<Image>,
+    tracks: &mut [Track],
+    runs: &mut [MethodRun],
+    keep: Option<Method>,
+) -> Result<Vec<Image>, String> {
+    let changes = par::map(images.len(), |i| {
+        tracks[i].prev.as_ref().map(|prev| {
+            let flip = plan.with_flip && plan.pair_flip.contains(&plan.methods[i]);
+            change(prev, &images[i], covered, flip)
+        })
+    })?;
+    let mut out = Vec::new();
+    for (i, img) in images.into_iter().enumerate() {
+        let t = &mut tracks[i];
+        if let Some(c) = changes[i] {
+            runs[i].pairs.push(c);
+        }
+        if let Some(prev) = &t.prev {
+            runs[i].identical &= *prev == img;
+        }
+        for ((px, lo), hi) in img.rgb.iter().zip(t.lo.iter_mut()).zip(t.hi.iter_mut()) {
+            for ((&c, l), h) in px.iter().zip(lo.iter_mut()).zip(hi.iter_mut()) {
+                let v = srgb8(c);
+                *l = (*l).min(v);
+                *h = (*h).max(v);
+            }
+        }
+        if keep == Some(plan.methods[i]) {
+            out.push(img.clone());
+        }
+        t.prev = Some(img);
+    }
+    Ok(out)
 }
 
 /// Per seed, the range (max - min) of the covered PSNR over the seed's orders; infinite
