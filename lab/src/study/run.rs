@@ -1,10 +1,10 @@
 //! `oit-lab run` (the main job: every scene with every method, the figures and the tables)
 //! and `oit-lab evaluate` (the same comparison on a fragment dump, then the smallest and the
 //! best bounded-memory methods).
-use super::evaluate::{evaluate, full_table, summary_table, vis_bias_where};
+use super::evaluate::{Evaluation, evaluate, full_table, summary_table, vis_bias_where};
 use crate::methods::catalog::{self, BUDGETS, HT_SIZES, MLAB_SIZES};
 use crate::methods::{BinnedStream, Method};
-use crate::metrics::score;
+use crate::metrics::{Scores, score};
 use crate::out::figure::{Figures, write_pictures};
 use crate::out::table::{HT_NOTE, num, progress_bar};
 use crate::scenes::Scene;
@@ -126,18 +126,45 @@ pub fn evaluate_command(
         stream.frags.len()
     );
     println!("{}", full_table(std::slice::from_ref(&e)));
-    let goal = match flip_target {
-        Some(f) => format!("PSNR >= {psnr_target} dB and mean FLIP <= {f} on covered pixels"),
-        None => format!("PSNR >= {psnr_target} dB on covered pixels"),
+    let goal = Goal {
+        psnr: psnr_target,
+        flip: flip_target,
     };
     let binned = BinnedStream::new(&stream);
-    // Judged on the covered pixels (where the reference has a fragment): the empty
-    // background is right in every method and would lift the PSNR. The whole-image values
-    // are printed beside.
+    smallest_sizes(&e, &binned, &goal)?;
+    bounded_search(&e, &binned, &goal, with_flip)
+}
+
+/// What `oit-lab evaluate` looks for, judged on the covered pixels (where the reference has a
+/// fragment: the empty background is right in every method and would lift the PSNR): a PSNR
+/// of at least `psnr` dB and, when given, a mean FLIP of at most `flip`.
+struct Goal {
+    psnr: f64,
+    flip: Option<f64>,
+}
+
+impl Goal {
+    fn met(&self, q: &Scores) -> bool {
+        q.covered.psnr >= self.psnr && self.flip.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f))
+    }
+}
+
+impl std::fmt::Display for Goal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.flip {
+            Some(x) => write!(f, "PSNR >= {} dB and mean FLIP <= {x} on covered pixels", self.psnr),
+            None => write!(f, "PSNR >= {} dB on covered pixels", self.psnr),
+        }
+    }
+}
+
+/// The smallest MLAB `M` and HT `K` of the lab's sizes reaching `goal` (each size tried is
+/// logged on stderr with its covered and whole-image values), and whether the run-time
+/// framebuffer offers that size.
+fn smallest_sizes(e: &Evaluation, binned: &BinnedStream, goal: &Goal) -> Result<(), String> {
     let check = |m: Method| -> Result<(bool, String), String> {
-        let img = m.render(&binned)?;
-        let q = score(&e.reference.image, &img, &e.covered, flip_target.is_some());
-        let ok = q.covered.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f));
+        let img = m.render(binned)?;
+        let q = score(&e.reference.image, &img, &e.covered, goal.flip.is_some());
         let flip = |v: Option<f64>| v.map_or(String::new(), |f| format!(", FLIP {f:.4}"));
         let line = format!(
             "{}: covered PSNR {:.1} dB{}; whole image PSNR {:.1} dB{}",
@@ -147,7 +174,7 @@ pub fn evaluate_command(
             q.whole.psnr,
             flip(q.whole.flip)
         );
-        Ok((ok, line))
+        Ok((goal.met(&q), line))
     };
     // The smallest size of `sizes` whose method reaches the goal.
     let smallest = |sizes: &[usize], method: fn(usize) -> Method| -> Result<Option<usize>, String> {
@@ -196,14 +223,18 @@ pub fn evaluate_command(
             HT_SIZES[HT_SIZES.len() - 1] + 1
         ),
     }
-    // Every bounded-memory method (issue 25; MLAB and HT at every size the lab has): the
-    // smallest reaching the goal, and the best within each budget.
+    Ok(())
+}
+
+/// Every bounded-memory method (issue 25; MLAB and HT at every size the lab has,
+/// [`catalog::evaluate_candidates`]): the smallest reaching `goal`, and the best within each
+/// budget of [`BUDGETS`].
+fn bounded_search(e: &Evaluation, binned: &BinnedStream, goal: &Goal, with_flip: bool) -> Result<(), String> {
     let mut scored = Vec::new();
     for m in catalog::evaluate_candidates() {
-        let img = m.render(&binned)?;
+        let img = m.render(binned)?;
         let q = score(&e.reference.image, &img, &e.covered, with_flip);
-        let ok = q.covered.psnr >= psnr_target && flip_target.is_none_or(|f| q.flip_covered.is_some_and(|x| x <= f));
-        scored.push((m, m.storage().per_pixel, q.covered.psnr, q.flip_covered, ok));
+        scored.push((m, m.storage().per_pixel, q.covered.psnr, q.flip_covered, goal.met(&q)));
     }
     scored.sort_by_key(|x| x.1);
     let show = |(m, b, p, f, _): &(Method, usize, f64, Option<f64>, bool)| {
