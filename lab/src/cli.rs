@@ -312,6 +312,24 @@ fn parse_seeds(a: &mut Args, default: &[u64]) -> Result<Vec<u64>, Fail> {
     Ok(seeds)
 }
 
+/// A sweep's size, seeds, orders and scenes.
+type Sweep = ((u32, u32), Vec<u64>, usize, Vec<Scene>);
+
+/// The options of a sweep over seeds and orders (stability, peers), in this order: `--size`
+/// (default 320x180), `--seeds`, `--orders` (checked or adjusted by `orders_ok`), `--scenes`.
+fn parse_sweep(
+    a: &mut Args,
+    seeds: &[u64],
+    orders: usize,
+    orders_ok: impl Fn(usize) -> Result<usize, Fail>,
+    scenes: &[Scene],
+) -> Result<Sweep, Fail> {
+    let size = parse_size_or(a, (320, 180))?;
+    let seeds = parse_seeds(a, seeds)?;
+    let orders = orders_ok(first(parse_list::<usize>(a, "--orders")?, orders))?;
+    Ok((size, seeds, orders, parse_scenes(a, scenes)?))
+}
+
 pub fn cmd_run(mut a: Args) -> Result<(), Fail> {
     let mut size = parse_size_or(&mut a, (640, 360))?;
     if a.flag(&["--hd"]) {
@@ -420,13 +438,16 @@ pub fn cmd_scenes(mut a: Args) -> Result<(), Fail> {
 }
 
 pub fn cmd_stability(mut a: Args) -> Result<(), Fail> {
-    let size = parse_size_or(&mut a, (320, 180))?;
-    let seeds = parse_seeds(&mut a, &[1, 2, 3, 4])?;
-    let orders = first(parse_list::<usize>(&mut a, "--orders")?, 8);
-    if orders < 2 {
-        return Err(usage("--orders: at least 2"));
-    }
-    let scenes = parse_scenes(&mut a, &Scene::MAIN)?;
+    let at_least_2 = |o| {
+        if o < 2 {
+            Err(usage("--orders: at least 2"))
+        } else {
+            Ok(o)
+        }
+    };
+    let (size, seeds, orders, scenes) = parse_sweep(&mut a, &[1, 2, 3, 4], 8, at_least_2, &Scene::MAIN)?;
+    let with_flip = !a.flag(&["--no-flip"]);
+    let pngs = !a.flag(&["--no-png"]);
     let all = catalog::stability();
     let strip_name = a.value("--strip")?.unwrap_or_else(|| "MLAB 2".into());
     let strip = all
@@ -435,8 +456,6 @@ pub fn cmd_stability(mut a: Args) -> Result<(), Fail> {
         .find(|m| m.name().eq_ignore_ascii_case(strip_name.trim()))
         .ok_or_else(|| usage(format!("--strip: '{strip_name}' is not one of the run's methods")))?;
     let out = PathBuf::from(a.value("--out")?.unwrap_or_else(|| "out".into()));
-    let with_flip = !a.flag(&["--no-flip"]);
-    let pngs = !a.flag(&["--no-png"]);
     a.finish()?;
     let plan = sweep::Plan {
         size,
@@ -451,10 +470,7 @@ pub fn cmd_stability(mut a: Args) -> Result<(), Fail> {
 }
 
 pub fn cmd_peers(mut a: Args) -> Result<(), Fail> {
-    let size = parse_size_or(&mut a, (320, 180))?;
-    let seeds = parse_seeds(&mut a, &[1, 2, 3])?;
-    let orders = first(parse_list::<usize>(&mut a, "--orders")?, 2).max(1);
-    let scenes = parse_scenes(&mut a, &Scene::ALL)?;
+    let (size, seeds, orders, scenes) = parse_sweep(&mut a, &[1, 2, 3], 2, |o| Ok(o.max(1)), &Scene::ALL)?;
     let with_flip = !a.flag(&["--no-flip"]);
     let camera = !a.flag(&["--no-camera"]);
     a.finish()?;

@@ -89,6 +89,14 @@ pub fn min_med_max(values: &[f64], digits: usize) -> String {
     format!("{} / {} / {}", f(lo), f(median(&v)), f(hi))
 }
 
+/// The first line of a command's report: `# NAME: WxH, DETAIL, S scenes x M methods, T s`
+/// (seconds with one decimal), and a blank line.
+pub fn header(name: &str, size: (u32, u32), detail: &str, counts: (usize, usize), seconds: f64) -> String {
+    let (w, h) = size;
+    let (scenes, methods) = counts;
+    format!("# {name}: {w}x{h}, {detail}, {scenes} scenes x {methods} methods, {seconds:.1} s\n")
+}
+
 /// A progress bar on stderr (hidden when stderr is not a terminal).
 pub fn progress_bar(len: u64) -> ProgressBar {
     let pb = ProgressBar::new(len);

@@ -120,19 +120,7 @@ pub fn command(plan: &BenchPlan, scenes: &[Scene], tiles: &[TileSize], svg: Opti
         size.1,
         mlab::lanes::BACKEND
     );
-    let all = run(&exe, scenes, plan, tiles, |m| {
-        eprintln!(
-            "  {} {} {} threads, tiles {}: {:.2} ms ({:.2} ns/fragment, spread {:.0}%, peak RSS {:.1} MiB)",
-            m.scene.name(),
-            m.what.name(),
-            m.threads,
-            m.tile,
-            m.timing.median * 1e3,
-            m.ns_per_fragment(),
-            m.timing.spread_percent(),
-            m.peak_rss as f64 / 1048576.0
-        )
-    })?;
+    let all = run(&exe, scenes, plan, tiles, |m| eprintln!("  {}", m.summary()))?;
     let (main_runs, band_runs): (Vec<_>, Vec<_>) = all.iter().cloned().partition(|m| m.tile == tile);
     println!("{}", tables(&main_runs, size.0));
     if !band_runs.is_empty() {

@@ -5,7 +5,7 @@
 use crate::methods::depth::{Depth, depth};
 use crate::methods::{Arith, BinnedStream, Image, Method, catalog, hybrid_with};
 use crate::metrics::{Covered, Quality, compare, compare_covered};
-use crate::out::table::{HT_NOTE, spread};
+use crate::out::table::{HT_NOTE, header, spread};
 use crate::par;
 use crate::scenes::Scene;
 use crate::stream::Stream;
@@ -371,13 +371,11 @@ pub fn command(size: (u32, u32), seeds: &[u64], scenes: &[Scene], with_flip: boo
             runs.push(r);
         }
     }
+    let counts = (scenes.len(), methods.len());
+    let secs = start.elapsed().as_secs_f64();
     println!(
-        "# oit-lab faint: {}x{}, seeds {seeds:?}, {} scenes x {} methods, {:.1} s\n",
-        size.0,
-        size.1,
-        scenes.len(),
-        methods.len(),
-        start.elapsed().as_secs_f64()
+        "{}",
+        header("oit-lab faint", size, &format!("seeds {seeds:?}"), counts, secs)
     );
     println!(
         "Values are median [min, max] over the seeds; covered pixels are those where the reference \

@@ -155,6 +155,13 @@ fn flip_spread(r: &MethodRun) -> String {
     spread(&r.samples.iter().map(|s| s.flip).collect::<Vec<_>>(), 3, false)
 }
 
+/// Four cells of a table row: the best by PSNR `(B/px)`, its PSNR spread, the best by FLIP
+/// `(B/px)`, its FLIP spread.
+fn best_cells(bp: &MethodRun, bf: &MethodRun) -> String {
+    let cell = |r: &MethodRun, values: String| format!("{} ({:.0}) | {values}", r.method.name(), r.bytes);
+    format!("{} | {}", cell(bp, psnr_spread(bp)), cell(bf, flip_spread(bf)))
+}
+
 /// The bounded methods of `sc` that fit `budget` B/px.
 fn within(sc: &SceneStability, budget: usize) -> Vec<&MethodRun> {
     let bounded = catalog::bounded();
@@ -219,14 +226,9 @@ pub fn budget_table(scenes: &[SceneStability]) -> String {
                 None => ("-".into(), "-".into(), "-".into()),
             };
             s += &format!(
-                "| {} | {budget} | {} ({:.0}) | {} | {} ({:.0}) | {} | {ml_name} | {ml_vals} | {diff} |\n",
+                "| {} | {budget} | {} | {ml_name} | {ml_vals} | {diff} |\n",
                 sc.scene.name(),
-                bp.method.name(),
-                bp.bytes,
-                psnr_spread(bp),
-                bf.method.name(),
-                bf.bytes,
-                flip_spread(bf),
+                best_cells(bp, bf),
             );
         }
     }
@@ -270,16 +272,11 @@ pub fn verdict_table(scenes: &[SceneStability], flicker: &[(Scene, Vec<Flicker>)
                 })
         };
         s += &format!(
-            "| {} | {} / {} | {} ({:.0}) | {} | {} ({:.0}) | {} | {verdict} | {} / {} / {} |\n",
+            "| {} | {} / {} | {} | {verdict} | {} / {} / {} |\n",
             sc.scene.name(),
             psnr_spread(m4),
             flip_spread(m4),
-            bp.method.name(),
-            bp.bytes,
-            psnr_spread(bp),
-            bf.method.name(),
-            bf.bytes,
-            flip_spread(bf),
+            best_cells(bp, bf),
             fl(Method::Mlab(4)),
             fl(bp.method),
             fl(bf.method),

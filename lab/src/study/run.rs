@@ -6,7 +6,7 @@ use crate::methods::catalog::{self, BUDGETS, HT_SIZES, MLAB_SIZES};
 use crate::methods::{BinnedStream, Method};
 use crate::metrics::{Scores, score};
 use crate::out::figure::{Figures, write_pictures};
-use crate::out::table::{HT_NOTE, num, progress_bar};
+use crate::out::table::{HT_NOTE, header, num, progress_bar};
 use crate::scenes::Scene;
 use std::path::Path;
 use std::time::Instant;
@@ -43,14 +43,9 @@ pub fn run_command(
     if pngs {
         figures.write(out, seed)?;
     }
-    println!(
-        "# oit-lab: {}x{}, seed {seed}, {} scenes x {} methods, {:.1} s\n",
-        size.0,
-        size.1,
-        scenes.len(),
-        methods.len(),
-        start.elapsed().as_secs_f64()
-    );
+    let counts = (scenes.len(), methods.len());
+    let secs = start.elapsed().as_secs_f64();
+    println!("{}", header("oit-lab", size, &format!("seed {seed}"), counts, secs));
     println!(
         "## PSNR (dB) / mean FLIP against the A-buffer\n\n{}",
         summary_table(&evals)

@@ -230,6 +230,21 @@ impl Measure {
         self.held + 4 * self.pixels as u64 + self.prims
     }
 
+    /// What the parent logs of a measure: the configuration, the median time, per fragment,
+    /// the spread and the peak resident memory.
+    pub fn summary(&self) -> String {
+        let what = format!("{} {} {} threads", self.scene.name(), self.what.name(), self.threads);
+        let t = &self.timing;
+        format!(
+            "{what}, tiles {}: {:.2} ms ({:.2} ns/fragment, spread {:.0}%, peak RSS {:.1} MiB)",
+            self.tile,
+            t.median * 1e3,
+            self.ns_per_fragment(),
+            t.spread_percent(),
+            self.peak_rss as f64 / 1048576.0
+        )
+    }
+
     /// The child's output line.
     pub fn to_line(&self) -> String {
         let t = &self.timing;
