@@ -20,6 +20,17 @@
 //! (`oit_lab::methods::over_step`, ...). Used by path: [`catalog`], the sizes the lab runs and
 //! every study's method list; [`depth`](mod@depth), fragments per covered pixel.
 
+/// `$f::<N, $a>($args)` for the `N` of `$sizes` that equals `$n` (const generics need a literal
+/// per size), else `$none`: the lab runs the kernel's framebuffers at these sizes only.
+macro_rules! by_size {
+    ($n:expr, [$($size:literal),*], $f:ident::<_, $a:ty> $args:tt, $none:expr) => {
+        match $n {
+            $($size => $f::<$size, $a> $args,)*
+            _ => $none,
+        }
+    };
+}
+
 pub mod adaptive;
 pub mod baselines;
 pub mod catalog;
