@@ -1,5 +1,8 @@
 //! The fragment dump: a little-endian binary file of one frame's fragment stream, for
-//! evaluating fragments captured from another renderer.
+//! evaluating fragments captured from another renderer (`oit-lab evaluate` reads one,
+//! `oit-lab dump` writes a scene's: [`crate::study::dump`]). The format stays here, beside
+//! [`crate::stream`]: a lower floor that the commands use, and the file `oit-lab evaluate
+//! --help` cites.
 //!
 //! | offset | size | field |
 //! |---|---|---|
@@ -19,7 +22,6 @@
 //! fragment its index in the file as its primitive id (unique in the frame, as the kernel's
 //! fragment key must be; a dump is one frame, with no camera path to hold still along).
 
-use crate::scenes::Scene;
 use crate::stream::{Frag, Stream};
 use mlab::FragmentError;
 
@@ -194,18 +196,4 @@ pub fn read(path: &std::path::Path) -> Result<Stream, DumpError> {
 /// Write a dump file.
 pub fn write(path: &std::path::Path, s: &Stream) -> Result<(), DumpError> {
     std::fs::write(path, to_bytes(s)).map_err(|e| DumpError::Io(format!("{}: {e}", path.display())))
-}
-
-/// `oit-lab dump`: write `scene`'s fragment stream (`size`, `seed`) to `output`, and say so.
-pub fn command(scene: Scene, size: (u32, u32), seed: u64, output: &str) -> Result<(), String> {
-    let s = scene.generate(size.0, size.1, seed);
-    write(std::path::Path::new(output), &s).map_err(|e| e.to_string())?;
-    println!(
-        "{}: {} fragments, {}x{}, written to {output}",
-        scene.name(),
-        s.frags.len(),
-        size.0,
-        size.1
-    );
-    Ok(())
 }

@@ -3,11 +3,13 @@
 
 use mlab::hybrid::{PaperTail, TailFormat};
 use mlab::{Arithmetic, Framebuffer, HybridFramebuffer, Paper, Row, Unbiased};
-use oit_lab::faint::{TailSums, depth, quantile, run_stream, spread, tail_sums};
+use oit_lab::methods::depth::depth;
 use oit_lab::methods::{Arith, BinnedStream, Image, Method, hybrid_with};
 use oit_lab::metrics::{compare, compare_covered};
+use oit_lab::out::table::spread;
 use oit_lab::scenes::Scene;
 use oit_lab::stream::{Frag, Stream};
+use oit_lab::study::faint::{TailSums, quantile, run_stream, tail_sums};
 
 fn stream(w: u32, h: u32, frags: &[(u32, f32, [f32; 3], f32)]) -> Stream {
     Stream {
@@ -297,7 +299,7 @@ fn spread_prints_median_min_max() {
 
 #[test]
 fn report_has_every_scene_and_method() {
-    let methods = oit_lab::faint::methods();
+    let methods = oit_lab::methods::catalog::faint();
     // OVER, then MLAB 1, 2, 4, 8 and HT 0, 1, 3, 7, each with both arithmetics.
     assert_eq!(methods.len(), 17);
     assert_eq!(
@@ -312,12 +314,12 @@ fn report_has_every_scene_and_method() {
         let s = sc.generate(32, 18, seed);
         runs.push(run_stream(sc, seed, &s, &methods, false).unwrap());
     }
-    let full = oit_lab::faint::full_table(&runs);
+    let full = oit_lab::study::faint::full_table(&runs);
     // Header, separator, one row per method and scene, a blank line and the HT naming note.
     assert_eq!(full.lines().count(), 2 + 2 * methods.len() + 2);
     assert!(full.contains("the paper's HT K+1"));
     assert!(full.contains("| MLAB 4 unbiased | 32 |") && full.contains("| HT 3 paper | 32 |"));
-    let head = oit_lab::faint::headline_table(&runs);
+    let head = oit_lab::study::faint::headline_table(&runs);
     assert_eq!(head.lines().count(), 2 + 2 + 2);
     assert!(head.starts_with("| scene | frags / covered px (mean; max) | OVER unsorted | MLAB 4 paper |"));
     // Two seeds of GLASS give a spread, one of SPLATS a single value.

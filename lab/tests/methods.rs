@@ -4,6 +4,7 @@ mod common;
 
 use common::{close, pixel, render};
 use oit_lab::methods::{Arith, BinnedStream, Method, Visibility, Weight};
+use oit_lab::stream::Stream;
 
 const RED: [f32; 3] = [0.5, 0.0, 0.0];
 const GREEN: [f32; 3] = [0.0, 0.5, 0.0];
@@ -299,14 +300,19 @@ fn hybrid_one_head_row_and_tail() {
     assert!((img.vis[0] - th * t_tail).abs() < 1e-6);
 }
 
+/// 300 faint fragments (alpha 0.01, grey 0.01) at distinct depths in one pixel, on black.
+fn faint_300() -> Stream {
+    let frags: Vec<_> = (0..300)
+        .map(|i| (1.0 + i as f32, [0.01, 0.01, 0.01], 0.01f32))
+        .collect();
+    pixel(&frags, [0.0; 3])
+}
+
 #[test]
 fn mlab_transmittance_stalls_in_8_bits() {
     // 300 faint fragments (alpha 0.01) merged into one row: the unorm8 product
     // round(x * 252 / 255) stops moving once x * 3 / 255 < 0.5.
-    let frags: Vec<_> = (0..300)
-        .map(|i| (1.0 + i as f32, [0.01, 0.01, 0.01], 0.01f32))
-        .collect();
-    let s = pixel(&frags, [0.0; 3]);
+    let s = faint_300();
     let img = render(Method::MlabWith(1, Arith::Paper), &s);
     let tf = 255.0 - q(0.01);
     let mut x = 255.0;
@@ -327,7 +333,7 @@ fn mlab_transmittance_stalls_in_8_bits() {
 fn every_standard_method_renders_a_small_scene() {
     let s = oit_lab::scenes::Scene::Glass.generate(32, 18, 7);
     let f = BinnedStream::new(&s);
-    for m in Method::standard_list() {
+    for m in oit_lab::methods::catalog::main_job() {
         let img = m.render(&f).unwrap();
         assert_eq!(img.rgb.len(), 32 * 18, "{}", m.name());
         // Meshkin's background weight is 1 - sum(a), negative past full opacity (seed 003).
@@ -395,10 +401,7 @@ fn unbiased_mlab_does_not_stall() {
     // an error at merge j is scaled by the later factors (about 0.99 each), so the variance at
     // the end is at most (1/4) / (1 - 0.99^2) = 12.6 LSB^2, a standard deviation of 3.5 LSB =
     // 0.014. The bound below is 4 standard deviations (0.055); the paper's stall is 0.116 off.
-    let frags: Vec<_> = (0..300)
-        .map(|i| (1.0 + i as f32, [0.01, 0.01, 0.01], 0.01f32))
-        .collect();
-    let s = pixel(&frags, [0.0; 3]);
+    let s = faint_300();
     let exact = render(Method::Reference, &s).vis[0];
     let unbiased = render(Method::MlabWith(1, Arith::Unbiased), &s).vis[0];
     let paper = render(Method::MlabWith(1, Arith::Paper), &s).vis[0];

@@ -122,7 +122,7 @@ fn scores_combine_whole_and_covered() {
 
 #[test]
 fn difference_is_gained_in_linear_light_by_hand() {
-    use oit_lab::picture::Picture;
+    use oit_lab::out::picture::Picture;
     // Errors of 1/255 and 0.1 gained 8x: 8/255 -> byte 8 (sRGB-encoded it would be
     // 1.055 * 0.03137^(1/2.4) - 0.055 = 0.194 -> byte 50), 0.8 -> byte 204; 0.2 gained 8x
     // saturates at 255. Values above 1 are clamped before the difference (no error).
@@ -141,8 +141,7 @@ fn difference_is_gained_in_linear_light_by_hand() {
 
 #[test]
 fn font_draws_the_glyph_bits() {
-    use oit_lab::font::{draw_text, glyph, text_width};
-    use oit_lab::picture::Picture;
+    use oit_lab::out::picture::{Picture, draw_text, glyph, text_width};
     // 'I' is .###. / ..#.. x5 / .###.; at scale 1 its top row inks columns 1-3, row 1 column 2.
     let mut p = Picture::filled(6, 7, [255; 3]);
     draw_text(&mut p, 0, 0, "I", 1, [0; 3]);
@@ -167,7 +166,7 @@ fn font_draws_the_glyph_bits() {
 
 #[test]
 fn densest_window_by_hand() {
-    use oit_lab::picture::densest;
+    use oit_lab::out::picture::densest;
     // 16x8 counts, all 1 except a 4x4 block of 9 at (8, 4): the 4x4 window on the 4-pixel
     // grid with the most fragments is that block (144 against at most 16 elsewhere).
     let mut counts = vec![1u32; 16 * 8];

@@ -1,9 +1,11 @@
 //! `oit-lab peers` on tiny frames: the camera path, its flicker measure, the budget choice.
 
 use oit_lab::methods::Method;
-use oit_lab::peers::{CAMERA_FRAMES, best_within, bounded_methods, camera_flicker, camera_stream};
+use oit_lab::methods::catalog::bounded;
+use oit_lab::out::table::median;
 use oit_lab::scenes::Scene;
-use oit_lab::stability::{Plan, median, run_scene};
+use oit_lab::study::peers::{CAMERA_FRAMES, best_within, camera_flicker, camera_stream};
+use oit_lab::study::sweep::{Plan, run_scene};
 
 #[test]
 fn camera_path_starts_at_the_scene_and_moves() {
@@ -45,7 +47,7 @@ fn flicker_is_measured_against_the_reference() {
 #[test]
 fn budget_choice_is_the_best_that_fits() {
     let mut methods = vec![Method::Reference];
-    methods.extend(bounded_methods());
+    methods.extend(bounded());
     let plan = Plan {
         size: (48, 27),
         seeds: vec![1],
@@ -64,7 +66,7 @@ fn budget_choice_is_the_best_that_fits() {
         let (bp, _) = best_within(&sc, budget).unwrap();
         let (bytes, best) = psnr(bp);
         assert!(bytes <= budget as f64, "{} fits {budget}", bp.name());
-        for m in bounded_methods() {
+        for m in bounded() {
             let (b, p) = psnr(m);
             assert!(
                 b > budget as f64 || p <= best,

@@ -3,8 +3,10 @@
 //! unsorted OVER do; the orders are shuffles of the primitive list.
 
 use oit_lab::methods::{Method, Weight};
+use oit_lab::out::table::median;
 use oit_lab::scenes::Scene;
-use oit_lab::stability::{Plan, median, order, run_scene, smallest};
+use oit_lab::study::stability::smallest;
+use oit_lab::study::sweep::{Plan, order, run_scene};
 
 fn plan(methods: Vec<Method>, seeds: Vec<u64>, orders: usize) -> Plan {
     Plan {

@@ -74,6 +74,16 @@ fn lab_rgba8(m: Method, s: &Stream) -> Vec<[u8; 4]> {
         .collect()
 }
 
+/// The test frame of `scene`: `small` for FOG and SPLATS (hundreds of layers per pixel, kept
+/// small to stay quick), `size` for the others.
+fn frame(scene: Scene, size: (u32, u32), small: (u32, u32)) -> (u32, u32) {
+    if matches!(scene, Scene::Fog | Scene::Splats) {
+        small
+    } else {
+        size
+    }
+}
+
 #[test]
 fn every_tile_size_and_thread_count_equals_one_band_one_thread() {
     // Widths not a multiple of 8 (a partial last span), 37 and 19 lines leave a short last
@@ -81,11 +91,7 @@ fn every_tile_size_and_thread_count_equals_one_band_one_thread() {
     // Tiles: whole lines, 8 columns (the narrowest), 16 and 40 columns (a short last tile;
     // 13 rounds up to 16), one tile wider than the frame.
     for scene in Scene::ALL {
-        let (w, h) = if matches!(scene, Scene::Fog | Scene::Splats) {
-            (43, 19)
-        } else {
-            (150, 37)
-        };
+        let (w, h) = frame(scene, (150, 37), (43, 19));
         let p = scene.primitives(w, h, 3);
         let frags = p.stream().frags.len() as u64;
         for m in TiledMethod::ALL {
@@ -118,11 +124,7 @@ fn every_tile_size_and_thread_count_equals_one_band_one_thread() {
 #[test]
 fn mlab_frame_equals_the_kernel_fed_the_stream() {
     for scene in Scene::ALL {
-        let (w, h) = if matches!(scene, Scene::Fog | Scene::Splats) {
-            (43, 21)
-        } else {
-            (96, 40)
-        };
+        let (w, h) = frame(scene, (96, 40), (43, 21));
         let p = scene.primitives(w, h, 2);
         let s = p.stream();
         assert_eq!(

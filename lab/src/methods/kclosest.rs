@@ -41,9 +41,6 @@
 use super::baselines::{r8_blend, window_depth};
 use super::{BinnedStream, Image, f16r, per_pixel};
 
-/// The K the lab runs (Diligent's tutorial offers a run-time choice; these are issue 25's).
-pub const KCLOSEST_SIZES: [usize; 3] = [2, 4, 8];
-
 /// Largest K supported.
 pub const KCLOSEST_MAX: usize = 8;
 

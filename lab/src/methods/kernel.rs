@@ -3,7 +3,8 @@
 //! the dithers hold still under camera motion), and the lab's [`Arith`] (which the `*_with` functions, here and in
 //! [`super::lanes`], turn into the kernel's arithmetic type).
 
-use super::{BinnedStream, HT_SIZES, Image, MLAB_SIZES};
+use super::catalog::{HT_SIZES, MLAB_SIZES};
+use super::{BinnedStream, Image};
 use mlab::glam::Vec3;
 use mlab::{
     Arithmetic, Fragment, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased,
@@ -54,15 +55,24 @@ fn kernel_image(
     resolve: impl Fn(u32, u32) -> Result<Resolved, String>,
 ) -> Result<Image, String> {
     let s = binned.stream;
+    let pixels = (0..s.height).flat_map(|y| (0..s.width).map(move |x| (x, y)));
+    image_of(binned, pixels.map(|(x, y)| resolve(x, y)))
+}
+
+/// The image of the stream from its resolved pixels, row major: each over the background, and
+/// its transmittance (the background's visibility).
+pub(super) fn image_of(
+    binned: &BinnedStream,
+    resolved: impl Iterator<Item = Result<Resolved, String>>,
+) -> Result<Image, String> {
+    let s = binned.stream;
     let bg = Vec3::from(s.background);
     let mut rgb = Vec::with_capacity(s.pixels());
     let mut vis = Vec::with_capacity(s.pixels());
-    for y in 0..s.height {
-        for x in 0..s.width {
-            let r = resolve(x, y)?;
-            rgb.push(r.over(bg).to_array());
-            vis.push(r.transmittance);
-        }
+    for r in resolved {
+        let r = r?;
+        rgb.push(r.over(bg).to_array());
+        vis.push(r.transmittance);
     }
     Ok(Image {
         width: s.width,
@@ -123,35 +133,21 @@ pub fn run_hybrid<const K: usize, A: Arithmetic>(binned: &BinnedStream) -> Resul
 }
 
 fn mlab_dyn<A: Arithmetic>(m: usize, binned: &BinnedStream, sorted: bool) -> Result<Image, String> {
-    match m {
-        1 => run_mlab::<1, A>(binned, sorted),
-        2 => run_mlab::<2, A>(binned, sorted),
-        3 => run_mlab::<3, A>(binned, sorted),
-        4 => run_mlab::<4, A>(binned, sorted),
-        5 => run_mlab::<5, A>(binned, sorted),
-        6 => run_mlab::<6, A>(binned, sorted),
-        7 => run_mlab::<7, A>(binned, sorted),
-        8 => run_mlab::<8, A>(binned, sorted),
-        12 => run_mlab::<12, A>(binned, sorted),
-        16 => run_mlab::<16, A>(binned, sorted),
-        _ => Err(format!("MLAB {m}: supported row counts are {MLAB_SIZES:?}")),
-    }
+    by_size!(
+        m,
+        [1, 2, 3, 4, 5, 6, 7, 8, 12, 16],
+        run_mlab::<_, A>(binned, sorted),
+        Err(format!("MLAB {m}: supported row counts are {MLAB_SIZES:?}"))
+    )
 }
 
 fn hybrid_dyn<A: Arithmetic>(k: usize, binned: &BinnedStream) -> Result<(Image, usize), String> {
-    match k {
-        0 => run_hybrid::<0, A>(binned),
-        1 => run_hybrid::<1, A>(binned),
-        2 => run_hybrid::<2, A>(binned),
-        3 => run_hybrid::<3, A>(binned),
-        4 => run_hybrid::<4, A>(binned),
-        5 => run_hybrid::<5, A>(binned),
-        6 => run_hybrid::<6, A>(binned),
-        7 => run_hybrid::<7, A>(binned),
-        11 => run_hybrid::<11, A>(binned),
-        15 => run_hybrid::<15, A>(binned),
-        _ => Err(format!("HT {k}: supported head sizes are {HT_SIZES:?}")),
-    }
+    by_size!(
+        k,
+        [0, 1, 2, 3, 4, 5, 6, 7, 11, 15],
+        run_hybrid::<_, A>(binned),
+        Err(format!("HT {k}: supported head sizes are {HT_SIZES:?}"))
+    )
 }
 
 // Where the lab's `Arith` picks the kernel's arithmetic type (and in `lanes.rs`).

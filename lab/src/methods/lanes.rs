@@ -1,9 +1,8 @@
 //! MLAB and HT through the kernel's 8-pixel lanes: the same images as [`super::kernel`], bit
 //! for bit.
 
-use super::kernel::err;
+use super::kernel::{err, image_of};
 use super::{Arith, BinnedStream, Image};
-use mlab::glam::Vec3;
 use mlab::lanes::LANES;
 use mlab::{Arithmetic, Framebuffer, HybridSpanFramebuffer, Paper, Row, SpanBatcher, SpanFramebuffer, Unbiased};
 
@@ -24,25 +23,16 @@ fn run_spans<F: Framebuffer>(binned: &BinnedStream, fb: &mut F) -> Result<Image,
             .map_err(err)?;
     }
     batch.finish().map_err(err)?;
-    let bg = Vec3::from(s.background);
-    let mut rgb = Vec::with_capacity(s.pixels());
-    let mut vis = Vec::with_capacity(s.pixels());
+    let mut pixels = Vec::with_capacity(s.pixels());
     for y in 0..s.height {
         for sx in 0..s.width.div_ceil(LANES as u32) {
             let r = fb.resolve_span(sx, y).ok_or("span out of range")?;
             for lane in 0..LANES.min((s.width - sx * LANES as u32) as usize) {
-                let p = r.get(lane).ok_or("lane out of range")?;
-                rgb.push(p.over(bg).to_array());
-                vis.push(p.transmittance);
+                pixels.push(r.get(lane).ok_or("lane out of range")?);
             }
         }
     }
-    Ok(Image {
-        width: s.width,
-        height: s.height,
-        rgb,
-        vis,
-    })
+    image_of(binned, pixels.into_iter().map(Ok))
 }
 
 /// MLAB `M` in arithmetic `A` through a [`SpanFramebuffer`].
@@ -66,23 +56,21 @@ fn hybrid_spans<const K: usize, A: Arithmetic>(binned: &BinnedStream) -> Result<
 }
 
 fn mlab_lanes<A: Arithmetic>(m: usize, binned: &BinnedStream) -> Result<Image, String> {
-    match m {
-        1 => mlab_spans::<1, A>(binned),
-        2 => mlab_spans::<2, A>(binned),
-        4 => mlab_spans::<4, A>(binned),
-        8 => mlab_spans::<8, A>(binned),
-        _ => Err(format!("MLAB {m} lanes: supported row counts are 1, 2, 4, 8")),
-    }
+    by_size!(
+        m,
+        [1, 2, 4, 8],
+        mlab_spans::<_, A>(binned),
+        Err(format!("MLAB {m} lanes: supported row counts are 1, 2, 4, 8"))
+    )
 }
 
 fn hybrid_lanes<A: Arithmetic>(k: usize, binned: &BinnedStream) -> Result<Image, String> {
-    match k {
-        0 => hybrid_spans::<0, A>(binned),
-        1 => hybrid_spans::<1, A>(binned),
-        3 => hybrid_spans::<3, A>(binned),
-        7 => hybrid_spans::<7, A>(binned),
-        _ => Err(format!("HT {k} lanes: supported head sizes are 0, 1, 3, 7")),
-    }
+    by_size!(
+        k,
+        [0, 1, 3, 7],
+        hybrid_spans::<_, A>(binned),
+        Err(format!("HT {k} lanes: supported head sizes are 0, 1, 3, 7"))
+    )
 }
 
 /// MLAB `m` (1, 2, 4 or 8) with arithmetic `arith` through the kernel's 8-pixel lanes.

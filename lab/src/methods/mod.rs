@@ -9,18 +9,32 @@
 //! MLAB and HT run in the kernel (`mlab`) through its framebuffer views, fragment by
 //! fragment in submission order, as a pixel shader would. A lane (SIMD) variant of the
 //! kernel becomes one more [`Method`] variant whose `render` calls it; see
-//! [`Method::standard_list`].
+//! [`catalog::main_job`].
 //!
 //! The files: [`reference`](mod@reference) the exact A-buffer; [`kernel`] MLAB and HT
 //! through the kernel's pixel-major framebuffers, and the lab's [`Arith`]; [`lanes`] the same
 //! kernels through the kernel's span batcher and span framebuffers; [`baselines`] OVER, UNDER,
 //! WBOIT, Bavoil-Myers and Meshkin with the render-target formulas they share with
 //! [`crate::tiled`]; [`adaptive`] Adaptive Transparency; [`moments`] moment-based OIT;
-//! [`kclosest`] K-closest layered OIT. Everything public is re-exported here
-//! (`oit_lab::methods::over_step`, ...).
+//! [`kclosest`] K-closest layered OIT. Everything public of those is re-exported here
+//! (`oit_lab::methods::over_step`, ...). Used by path: [`catalog`], the sizes the lab runs and
+//! every study's method list; [`depth`](mod@depth), fragments per covered pixel.
+
+/// `$f::<N, $a>($args)` for the `N` of `$sizes` that equals `$n` (const generics need a literal
+/// per size), else `$none`: the lab runs the kernel's framebuffers at these sizes only.
+macro_rules! by_size {
+    ($n:expr, [$($size:literal),*], $f:ident::<_, $a:ty> $args:tt, $none:expr) => {
+        match $n {
+            $($size => $f::<$size, $a> $args,)*
+            _ => $none,
+        }
+    };
+}
 
 pub mod adaptive;
 pub mod baselines;
+pub mod catalog;
+pub mod depth;
 pub mod kclosest;
 pub mod kernel;
 pub mod lanes;
@@ -29,7 +43,7 @@ pub mod reference;
 
 pub use adaptive::{Visibility, at_first_removable};
 pub use baselines::{UNDER_THRESHOLD, Weight, f16r, over_step, r8_blend, wboit_resolve, wboit_step};
-pub use kclosest::{KCLOSEST_SIZES, Layers};
+pub use kclosest::Layers;
 pub use kernel::{Arith, hybrid_with, mlab_sorted_with, mlab_with, run_hybrid, run_mlab};
 pub use lanes::{hybrid_lanes_with, mlab_lanes_with};
 pub use moments::{MomentKind, MomentState, Moments};
@@ -120,11 +134,6 @@ impl Storage {
     }
 }
 
-/// MLAB row counts the lab can run (const generics are instantiated for these).
-pub const MLAB_SIZES: [usize; 10] = [1, 2, 3, 4, 5, 6, 7, 8, 12, 16];
-/// HT head sizes the lab can run.
-pub const HT_SIZES: [usize; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 11, 15];
-
 /// A compositing method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
@@ -171,34 +180,6 @@ pub enum Method {
 }
 
 impl Method {
-    /// The methods of the main job, in table order. A lanes variant of the kernel goes here
-    /// as one more entry per size (for example `Method::MlabLanes(m)` after `Method::Mlab(m)`).
-    pub fn standard_list() -> Vec<Method> {
-        let mut v = vec![Method::Over, Method::Under];
-        for m in [1, 2, 4, 8] {
-            v.push(Method::Mlab(m));
-        }
-        for m in [1, 2, 4, 8] {
-            v.push(Method::Hybrid(m - 1));
-        }
-        v.push(Method::MlabLanes(4));
-        v.push(Method::HybridLanes(3));
-        v.push(Method::MlabSorted(1));
-        v.push(Method::MlabSorted(4));
-        for n in [2, 4, 8] {
-            v.push(Method::Adaptive(n));
-        }
-        v.extend(Weight::ALL.map(Method::Wboit));
-        v.push(Method::BavoilMyers);
-        v.push(Method::Meshkin);
-        // Issue 25's peers, one each (every variant is in `oit-lab peers`): K-closest with 4
-        // layers (20 B/px) and the paper's 6 power moments at 16 bit (112 bits + the RGBA16F
-        // target, 22 B/px).
-        v.push(Method::KClosest(4));
-        v.push(Method::Mboit(Moments::new(MomentKind::Power6, true)));
-        v
-    }
-
     /// Display name.
     pub fn name(self) -> String {
         match self {

@@ -2,7 +2,7 @@
 //! today (moment-based OIT, K-closest layered OIT, HT, WBOIT, ...) by memory budget, over
 //! several scene seeds and primitive orders, and the flicker of each under a moving camera.
 //!
-//! - **Budgets**: every scene is run as `oit-lab stability` runs it ([`stability::run_scene`]:
+//! - **Budgets**: every scene is run as `oit-lab stability` runs it ([`sweep::run_scene`]:
 //!   seeds x primitive orders, each image scored on the covered pixels against the A-buffer of
 //!   the same stream); per budget (8, 16, 32, 64 B/px) the method of the best median PSNR and
 //!   the one of the best median FLIP among those that fit ([`budget_table`]), and the verdict
@@ -19,59 +19,17 @@
 //!   share of pixels where it exceeds 2 levels ([`Flicker`]): the flicker the method adds to
 //!   what the scene itself does.
 
-use crate::faint::spread;
-use crate::methods::{Arith, BinnedStream, Image, Method, Moments, Weight};
+use crate::methods::catalog::{self, BUDGETS};
+use crate::methods::{BinnedStream, Image, Method};
 use crate::metrics::{CHANGE_LEVELS, srgb8};
-use crate::report::progress_bar;
+use crate::out::table::{median, progress_bar, spread};
 use crate::scenes::{Rng, Scene};
-use crate::stability::{self, MethodRun, Plan, SceneStability, median};
 use crate::stream::{Frag, Stream};
+use crate::study::sweep::{self, MethodRun, Plan, SceneStability};
 use std::time::Instant;
-
-/// The memory budgets of the tables, B/px.
-pub const BUDGETS: [usize; 4] = [8, 16, 32, 64];
 
 /// Frames of the camera path.
 pub const CAMERA_FRAMES: usize = 16;
-
-/// The bounded-memory methods (memory that does not grow with the fragments), in table order.
-pub fn bounded_methods() -> Vec<Method> {
-    let mut v = vec![Method::Over];
-    v.extend([1, 2, 3, 4, 8].map(Method::Mlab));
-    v.extend([0, 1, 3, 7].map(Method::Hybrid));
-    v.extend(crate::methods::KCLOSEST_SIZES.map(Method::KClosest));
-    v.extend(Moments::ALL.map(Method::Mboit));
-    v.extend(Weight::ALL.map(Method::Wboit));
-    v.push(Method::BavoilMyers);
-    v.push(Method::Meshkin);
-    v
-}
-
-/// The methods of a peers run: the A-buffer, the bounded ones, AT 4 (which stores every
-/// fragment, as the A-buffer does), and MLAB 4 with f32 rows (the ceiling of MLAB 4's 8-byte
-/// rows: 20 bytes a row, not a candidate of any budget).
-pub fn methods() -> Vec<Method> {
-    let mut v = vec![Method::Reference];
-    v.extend(bounded_methods());
-    v.push(Method::Adaptive(4));
-    v.push(Method::MlabF32(4));
-    v
-}
-
-/// The methods whose camera-motion flicker is measured.
-pub fn flicker_methods() -> Vec<Method> {
-    let mut v = vec![Method::Reference, Method::Over];
-    v.extend([2, 4, 8].map(Method::Mlab));
-    v.extend([1, 3].map(Method::Hybrid));
-    v.extend(crate::methods::KCLOSEST_SIZES.map(Method::KClosest));
-    v.extend(Moments::ALL.map(Method::Mboit));
-    v.push(Method::Wboit(Weight::Eq7));
-    v.push(Method::Adaptive(4));
-    // MLAB 4 with the paper's rounding (no dither): how much of MLAB's flicker is the
-    // default arithmetic's dithered merge.
-    v.push(Method::MlabWith(4, Arith::Paper));
-    v
-}
 
 /// Frame `frame` of the seeded camera path of `scene` at `size` (see the module).
 pub fn camera_stream(scene: Scene, (w, h): (u32, u32), seed: u64, frame: usize) -> Stream {
@@ -197,9 +155,16 @@ fn flip_spread(r: &MethodRun) -> String {
     spread(&r.samples.iter().map(|s| s.flip).collect::<Vec<_>>(), 3, false)
 }
 
+/// Four cells of a table row: the best by PSNR `(B/px)`, its PSNR spread, the best by FLIP
+/// `(B/px)`, its FLIP spread.
+fn best_cells(bp: &MethodRun, bf: &MethodRun) -> String {
+    let cell = |r: &MethodRun, values: String| format!("{} ({:.0}) | {values}", r.method.name(), r.bytes);
+    format!("{} | {}", cell(bp, psnr_spread(bp)), cell(bf, flip_spread(bf)))
+}
+
 /// The bounded methods of `sc` that fit `budget` B/px.
 fn within(sc: &SceneStability, budget: usize) -> Vec<&MethodRun> {
-    let bounded = bounded_methods();
+    let bounded = catalog::bounded();
     sc.runs
         .iter()
         .filter(|r| bounded.contains(&r.method) && r.bytes <= budget as f64 + 1e-9)
@@ -261,14 +226,9 @@ pub fn budget_table(scenes: &[SceneStability]) -> String {
                 None => ("-".into(), "-".into(), "-".into()),
             };
             s += &format!(
-                "| {} | {budget} | {} ({:.0}) | {} | {} ({:.0}) | {} | {ml_name} | {ml_vals} | {diff} |\n",
+                "| {} | {budget} | {} | {ml_name} | {ml_vals} | {diff} |\n",
                 sc.scene.name(),
-                bp.method.name(),
-                bp.bytes,
-                psnr_spread(bp),
-                bf.method.name(),
-                bf.bytes,
-                flip_spread(bf),
+                best_cells(bp, bf),
             );
         }
     }
@@ -312,16 +272,11 @@ pub fn verdict_table(scenes: &[SceneStability], flicker: &[(Scene, Vec<Flicker>)
                 })
         };
         s += &format!(
-            "| {} | {} / {} | {} ({:.0}) | {} | {} ({:.0}) | {} | {verdict} | {} / {} / {} |\n",
+            "| {} | {} / {} | {} | {verdict} | {} / {} / {} |\n",
             sc.scene.name(),
             psnr_spread(m4),
             flip_spread(m4),
-            bp.method.name(),
-            bp.bytes,
-            psnr_spread(bp),
-            bf.method.name(),
-            bf.bytes,
-            flip_spread(bf),
+            best_cells(bp, bf),
             fl(Method::Mlab(4)),
             fl(bp.method),
             fl(bf.method),
@@ -381,7 +336,7 @@ pub struct PeersPlan {
 /// `oit-lab peers`: the budget tables, the verdicts and the camera flicker; prints Markdown.
 pub fn command(plan: &PeersPlan, scenes: &[Scene]) -> Result<(), String> {
     let start = Instant::now();
-    let all = methods();
+    let all = catalog::peers();
     let splan = Plan {
         size: plan.size,
         seeds: plan.seeds.clone(),
@@ -395,14 +350,14 @@ pub fn command(plan: &PeersPlan, scenes: &[Scene]) -> Result<(), String> {
     let mut results = Vec::new();
     let mut flicker = Vec::new();
     for &sc in scenes {
-        let r = stability::run_scene(sc, &splan, |seed, o| {
+        let r = sweep::run_scene(sc, &splan, |seed, o| {
             pb.set_message(format!("{} seed {seed} order {o}", sc.name()));
             pb.inc(1);
         })?;
         results.push(r);
         if plan.camera {
             pb.set_message(format!("{} camera path", sc.name()));
-            flicker.push((sc, camera_flicker(sc, plan.size, plan.seeds[0], &flicker_methods())?));
+            flicker.push((sc, camera_flicker(sc, plan.size, plan.seeds[0], &catalog::flicker())?));
             pb.inc(1);
         }
     }
@@ -435,7 +390,7 @@ pub fn command(plan: &PeersPlan, scenes: &[Scene]) -> Result<(), String> {
     }
     println!(
         "## Every method (covered PSNR and FLIP over seeds and orders)\n\n{}",
-        stability::table(&results, &all)
+        sweep::table(&results, &all)
     );
     Ok(())
 }

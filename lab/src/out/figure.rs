@@ -4,8 +4,8 @@
 //! every image, difference and FLIP map.
 
 use crate::methods::Method;
-use crate::picture::{Cell, FigureRow, INSET_ZOOM, Picture, counts_picture, create_dir, densest, labelled_figure};
-use crate::report::Evaluation;
+use crate::out::picture::{Cell, FigureRow, INSET_ZOOM, Picture, counts_picture, create_dir, densest, labelled_figure};
+use crate::study::evaluate::Evaluation;
 use std::path::Path;
 
 /// Gain of the difference images (linear light, [`Picture::difference`]).

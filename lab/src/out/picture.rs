@@ -1,5 +1,9 @@
 //! PNG output: single images, difference images and the Figure 3 grid.
 
+mod font;
+
+pub use font::{ADVANCE, GLYPH_H, GLYPH_W, LINE, glyph, text_width};
+
 use crate::methods::Image;
 use std::path::Path;
 
@@ -280,12 +284,27 @@ fn with_inset(pic: &Picture, factor: u32, region: (u32, u32, u32, u32)) -> Pictu
     cell
 }
 
+/// Draw `text` with its top-left corner at `(x, y)`, each glyph pixel a `scale x scale`
+/// square of `color` (clipped to the picture).
+pub fn draw_text(pic: &mut Picture, x: u32, y: u32, text: &str, scale: u32, color: [u8; 3]) {
+    let scale = scale.max(1);
+    for (i, c) in text.chars().enumerate() {
+        let gx = x + i as u32 * ADVANCE * scale;
+        for (row, bits) in glyph(c).iter().enumerate() {
+            for col in 0..GLYPH_W {
+                if bits & (1 << (GLYPH_W - 1 - col)) != 0 {
+                    pic.fill_rect(gx + col * scale, y + row as u32 * scale, scale, scale, color);
+                }
+            }
+        }
+    }
+}
+
 /// The labelled figure: legend lines at the top, method names over the columns, per scene
 /// (name on the left) a row of images each with a zoomed inset of the scene's dense region and
 /// a caption under it, then a row of lower pictures (difference images) with their captions.
 /// Cells are the full-size pictures downscaled by `factor`.
 pub fn labelled_figure(rows: &[FigureRow], factor: u32, legend: &[String]) -> Picture {
-    use crate::font::{LINE, draw_text, text_width};
     let Some(first) = rows.first().and_then(|r| r.cells.first()) else {
         return Picture::filled(1, 1, [255; 3]);
     };

@@ -1,8 +1,8 @@
 //! A tiny bitmap font for the labels of the PNG figures: 5x7 glyphs drawn by hand for the
 //! characters the labels use (ASCII letters, digits and common punctuation), each scaled by
 //! an integer. No dependency: the figures need a few dozen short labels, not typography.
-
-use crate::picture::Picture;
+//! Private to [`super`] (the picture draws the text, [`super::draw_text`]): the glyphs know
+//! nothing of pictures.
 
 /// Glyph cell: 5 columns and 7 rows of ink, advanced by 6 columns, lines 9 rows apart.
 pub const GLYPH_W: u32 = 5;
@@ -120,21 +120,5 @@ pub fn text_width(text: &str, scale: u32) -> u32 {
         0
     } else {
         (n * ADVANCE - (ADVANCE - GLYPH_W)) * scale
-    }
-}
-
-/// Draw `text` with its top-left corner at `(x, y)`, each glyph pixel a `scale x scale`
-/// square of `color` (clipped to the picture).
-pub fn draw_text(pic: &mut Picture, x: u32, y: u32, text: &str, scale: u32, color: [u8; 3]) {
-    let scale = scale.max(1);
-    for (i, c) in text.chars().enumerate() {
-        let gx = x + i as u32 * ADVANCE * scale;
-        for (row, bits) in glyph(c).iter().enumerate() {
-            for col in 0..GLYPH_W {
-                if bits & (1 << (GLYPH_W - 1 - col)) != 0 {
-                    pic.fill_rect(gx + col * scale, y + row as u32 * scale, scale, scale, color);
-                }
-            }
-        }
     }
 }

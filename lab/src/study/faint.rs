@@ -2,45 +2,14 @@
 //! pixel's fragments beyond the nearest `K`), fragments per covered pixel, and the report of
 //! `oit-lab faint` (MLAB and HT at equal memory, both arithmetics, against unsorted OVER).
 
-use crate::methods::{Arith, BinnedStream, Image, Method, hybrid_with};
+use crate::methods::depth::{Depth, depth};
+use crate::methods::{Arith, BinnedStream, Image, Method, catalog, hybrid_with};
 use crate::metrics::{Covered, Quality, compare, compare_covered};
+use crate::out::table::{HT_NOTE, header, spread};
+use crate::par;
 use crate::scenes::Scene;
 use crate::stream::Stream;
-use std::sync::Mutex;
 use std::time::Instant;
-
-/// Fragments per covered pixel (a pixel is covered when it has at least one fragment).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Depth {
-    /// Pixels with at least one fragment.
-    pub covered: usize,
-    /// Mean fragment count over the covered pixels (0 when none is covered).
-    pub mean: f64,
-    /// Largest fragment count of a pixel.
-    pub max: usize,
-}
-
-/// Fragments per covered pixel of a frame.
-pub fn depth(binned: &BinnedStream) -> Depth {
-    let (mut covered, mut total, mut max) = (0usize, 0usize, 0usize);
-    for w in binned.bins.start.windows(2) {
-        let n = (w[1] - w[0]) as usize;
-        if n > 0 {
-            covered += 1;
-            total += n;
-            max = max.max(n);
-        }
-    }
-    Depth {
-        covered,
-        mean: if covered > 0 {
-            total as f64 / covered as f64
-        } else {
-            0.0
-        },
-        max,
-    }
-}
 
 /// Exact (unsaturated) tail sums of one pixel, in units of 1/255: the sums HT's tail would
 /// hold with fields wide enough never to saturate.
@@ -158,24 +127,8 @@ pub fn tail_table(rows: &[(String, u64, TailStats)], k: usize) -> String {
         let pct = 100.0 * t.paper_saturated as f64 / t.depth.covered.max(1) as f64;
         s += &format!(" {} px ({pct:.1} %) |\n", t.paper_saturated);
     }
-    s += &format!("\n{}\n", crate::report::HT_NOTE);
+    s += &format!("\n{}\n", HT_NOTE);
     s
-}
-
-/// The methods of the report, by memory: unsorted OVER (8 B), then for `M` = 1, 2, 4, 8 MLAB
-/// `M` and HT `K = M - 1` (both `8 M` bytes per pixel), each with the paper's arithmetic and
-/// the unbiased one.
-pub fn methods() -> Vec<Method> {
-    let mut v = vec![Method::Over];
-    for m in [1usize, 2, 4, 8] {
-        for a in Arith::ALL {
-            v.push(Method::MlabWith(m, a));
-        }
-        for a in Arith::ALL {
-            v.push(Method::HybridWith(m - 1, a));
-        }
-    }
-    v
 }
 
 /// One method on one stream.
@@ -223,29 +176,11 @@ pub fn run_stream(
     let binned = BinnedStream::new(stream);
     let reference = Method::Reference.render(&binned)?;
     let covered: Vec<bool> = binned.bins.start.windows(2).map(|w| w[1] > w[0]).collect();
-    let queue = Mutex::new((0..methods.len()).rev().collect::<Vec<_>>());
-    let results = Mutex::new(vec![None; methods.len()]);
-    let threads = std::thread::available_parallelism().map_or(1, |t| t.get()).clamp(1, 16);
-    std::thread::scope(|s| {
-        for _ in 0..threads.min(methods.len()) {
-            s.spawn(|| {
-                while let Some(i) = queue.lock().ok().and_then(|mut q| q.pop()) {
-                    let m = methods[i];
-                    let r = measure(&binned, &reference, &covered, m, with_flip);
-                    if let Ok(mut out) = results.lock() {
-                        out[i] = Some(r);
-                    }
-                }
-            });
-        }
-    });
-    let results = results
-        .into_inner()
-        .map_err(|_| "a measuring thread failed".to_string())?;
-    let mut measures = Vec::with_capacity(methods.len());
-    for r in results {
-        measures.push(r.ok_or("a measuring thread failed")??);
-    }
+    let measures = par::map(methods.len(), |i| {
+        measure(&binned, &reference, &covered, methods[i], with_flip)
+    })?
+    .into_iter()
+    .collect::<Result<Vec<_>, _>>()?;
     Ok(SceneRun {
         scene,
         seed,
@@ -273,37 +208,6 @@ fn measure(
         covered: compare_covered(reference, &image, covered),
         saturated,
     })
-}
-
-/// `median [min, max]` of `values` with `digits` decimals (`+` sign when `signed`); just the
-/// value when there is one; `-` when none. The median of an even count is the mean of the
-/// middle two. Infinite values print as `inf`.
-pub fn spread(values: &[f64], digits: usize, signed: bool) -> String {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
-    if v.is_empty() {
-        return "-".into();
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    let median = if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        (v[n / 2 - 1] + v[n / 2]) / 2.0
-    };
-    let f = |x: f64| {
-        if x.is_infinite() {
-            if x > 0.0 { "inf".to_string() } else { "-inf".to_string() }
-        } else if signed {
-            format!("{x:+.digits$}")
-        } else {
-            format!("{x:.digits$}")
-        }
-    };
-    if n == 1 {
-        f(median)
-    } else {
-        format!("{} [{}, {}]", f(median), f(v[0]), f(v[n - 1]))
-    }
 }
 
 /// The value of largest magnitude (0 for none).
@@ -375,7 +279,7 @@ pub fn full_table(runs: &[SceneRun]) -> String {
             );
         }
     }
-    s += &format!("\n{}\n", crate::report::HT_NOTE);
+    s += &format!("\n{}\n", HT_NOTE);
     s
 }
 
@@ -417,7 +321,7 @@ pub fn headline_table(runs: &[SceneRun]) -> String {
         }
         s += "\n";
     }
-    s += &format!("\n{}\n", crate::report::HT_NOTE);
+    s += &format!("\n{}\n", HT_NOTE);
     s
 }
 
@@ -447,11 +351,11 @@ pub fn tails_command(size: (u32, u32), seeds: &[u64], scenes: &[Scene], k: usize
     Ok(())
 }
 
-/// `oit-lab faint`: every scene of `scenes` at every seed of `seeds` with [`methods`]
+/// `oit-lab faint`: every scene of `scenes` at every seed of `seeds` with [`catalog::faint`]
 /// ([`run_stream`]); prints the headline table and every method's.
 pub fn command(size: (u32, u32), seeds: &[u64], scenes: &[Scene], with_flip: bool) -> Result<(), String> {
     let start = Instant::now();
-    let methods = methods();
+    let methods = catalog::faint();
     let mut runs = Vec::new();
     for sc in scenes {
         for &seed in seeds {
@@ -467,13 +371,11 @@ pub fn command(size: (u32, u32), seeds: &[u64], scenes: &[Scene], with_flip: boo
             runs.push(r);
         }
     }
+    let counts = (scenes.len(), methods.len());
+    let secs = start.elapsed().as_secs_f64();
     println!(
-        "# oit-lab faint: {}x{}, seeds {seeds:?}, {} scenes x {} methods, {:.1} s\n",
-        size.0,
-        size.1,
-        scenes.len(),
-        methods.len(),
-        start.elapsed().as_secs_f64()
+        "{}",
+        header("oit-lab faint", size, &format!("seeds {seeds:?}"), counts, secs)
     );
     println!(
         "Values are median [min, max] over the seeds; covered pixels are those where the reference \
