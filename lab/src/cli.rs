@@ -409,7 +409,7 @@ pub fn cmd_faint(mut a: Args) -> Result<(), Fail> {
         .and_then(|v| v.first().copied())
         .unwrap_or(3);
     let arith = match a.value("--arith")?.as_deref() {
-        None => Arith::DEFAULT,
+        None => Arith::default(),
         Some(n) => Arith::ALL
             .into_iter()
             .find(|x| x.name() == n.to_ascii_lowercase())

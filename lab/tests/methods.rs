@@ -374,8 +374,8 @@ fn lanes_give_the_same_image_as_scalar() {
             }
         }
         // The methods without an arithmetic run the kernel's default.
-        assert!(Method::MlabLanes(4).render(&f).unwrap() == mlab_with(4, Arith::DEFAULT, &f).unwrap());
-        assert!(Method::Hybrid(3).render(&f).unwrap() == hybrid_with(3, Arith::DEFAULT, &f).unwrap().0);
+        assert!(Method::MlabLanes(4).render(&f).unwrap() == mlab_with(4, Arith::default(), &f).unwrap());
+        assert!(Method::Hybrid(3).render(&f).unwrap() == hybrid_with(3, Arith::default(), &f).unwrap().0);
     }
     println!("lanes backend: {}", mlab::lanes::BACKEND);
 }
@@ -388,7 +388,7 @@ fn arith_default_is_the_kernels_default() {
     }
     let mut storage = [mlab::Row::EMPTY; 4];
     let _ = same(mlab::MlabFramebuffer::<4>::new(&mut storage, 1, 1).unwrap());
-    assert_eq!(Arith::DEFAULT, Arith::Unbiased);
+    assert_eq!(Arith::default(), Arith::Unbiased);
 }
 
 #[test]

@@ -10,43 +10,19 @@ use mlab::{
     Arithmetic, Fragment, Framebuffer, HybridFramebuffer, MlabFramebuffer, Paper, Resolved, Row, TailFormat, Unbiased,
 };
 
-/// The kernel's arithmetic (issue 9): how MLAB's merge rounds its unorm8 products, how a
-/// fragment is quantized to a row, and the HT tail's layout: `mlab::Paper` or
-/// `mlab::Unbiased`. The lab turns it into the kernel's type only in the `*_with` functions
-/// ([`mlab_with`], [`hybrid_with`], [`mlab_lanes_with`](super::mlab_lanes_with), ...).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Arith {
-    /// The paper's: products and fragments rounded to nearest, the 3 x 10-bit tail.
-    Paper,
-    /// The unbiased one: dithered rounding, a tail that does not saturate on dense content.
-    Unbiased,
-}
+/// The kernel's arithmetic as a run-time value ([`mlab::ArithKind`]: `Paper` or `Unbiased`,
+/// the default): how MLAB's merge rounds its unorm8 products, how a fragment is quantized to a
+/// row, and the HT tail's layout. The lab turns it into the kernel's type only in the `*_with`
+/// functions ([`mlab_with`], [`hybrid_with`], [`mlab_lanes_with`](super::mlab_lanes_with), ...).
+pub use mlab::ArithKind as Arith;
 
-impl Arith {
-    /// Both, paper first.
-    pub const ALL: [Arith; 2] = [Arith::Paper, Arith::Unbiased];
-
-    /// `"paper"` or `"unbiased"`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Arith::Paper => "paper",
-            Arith::Unbiased => "unbiased",
-        }
-    }
-
-    /// The kernel's default arithmetic (what `MlabFramebuffer::<M>` and the other kernel
-    /// types use when none is named), which [`Method::Mlab`](super::Method::Mlab) and the other kernel methods
-    /// without an arithmetic run.
-    pub const DEFAULT: Arith = Arith::Unbiased;
-
-    /// A validated fragment quantized to a row as this arithmetic quantizes it in the pixel
-    /// of id `pixel` (`y * width + x`, as a framebuffer's `pixel_id`).
-    pub fn quantize(self, fragment: &Fragment, pixel: u32) -> Row {
-        let h = fragment.hash(pixel);
-        match self {
-            Arith::Paper => Paper::quantize(fragment, h),
-            Arith::Unbiased => Unbiased::quantize(fragment, h),
-        }
+/// A validated fragment quantized to a row as `arith` quantizes it in the pixel of id `pixel`
+/// (`y * width + x`, as a framebuffer's `pixel_id`).
+pub fn quantize(arith: Arith, fragment: &Fragment, pixel: u32) -> Row {
+    let h = fragment.hash(pixel);
+    match arith {
+        Arith::Paper => Paper::quantize(fragment, h),
+        Arith::Unbiased => Unbiased::quantize(fragment, h),
     }
 }
 

@@ -44,7 +44,7 @@ pub mod reference;
 pub use adaptive::{Visibility, at_first_removable};
 pub use baselines::{UNDER_THRESHOLD, Weight, f16r, over_step, r8_blend, wboit_resolve, wboit_step};
 pub use kclosest::Layers;
-pub use kernel::{Arith, hybrid_with, mlab_sorted_with, mlab_with, run_hybrid, run_mlab};
+pub use kernel::{Arith, hybrid_with, mlab_sorted_with, mlab_with, quantize, run_hybrid, run_mlab};
 pub use lanes::{hybrid_lanes_with, mlab_lanes_with};
 pub use moments::{MomentKind, MomentState, Moments};
 
@@ -254,11 +254,11 @@ impl Method {
     pub fn render(self, binned: &BinnedStream) -> Result<Image, String> {
         match self {
             Method::Reference => Ok(reference(binned)),
-            Method::Mlab(m) => mlab_with(m, Arith::DEFAULT, binned),
-            Method::MlabSorted(m) => mlab_sorted_with(m, Arith::DEFAULT, binned),
-            Method::MlabLanes(m) => mlab_lanes_with(m, Arith::DEFAULT, binned),
-            Method::HybridLanes(k) => hybrid_lanes_with(k, Arith::DEFAULT, binned),
-            Method::Hybrid(k) => hybrid_with(k, Arith::DEFAULT, binned).map(|(image, _)| image),
+            Method::Mlab(m) => mlab_with(m, Arith::default(), binned),
+            Method::MlabSorted(m) => mlab_sorted_with(m, Arith::default(), binned),
+            Method::MlabLanes(m) => mlab_lanes_with(m, Arith::default(), binned),
+            Method::HybridLanes(k) => hybrid_lanes_with(k, Arith::default(), binned),
+            Method::Hybrid(k) => hybrid_with(k, Arith::default(), binned).map(|(image, _)| image),
             Method::MlabWith(m, a) => mlab_with(m, a, binned),
             Method::HybridWith(k, a) => hybrid_with(k, a, binned).map(|(image, _)| image),
             Method::Over => Ok(over(binned)),

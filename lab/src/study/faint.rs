@@ -3,7 +3,7 @@
 //! `oit-lab faint` (MLAB and HT at equal memory, both arithmetics, against unsorted OVER).
 
 use crate::methods::depth::{Depth, depth};
-use crate::methods::{Arith, BinnedStream, Image, Method, catalog, hybrid_with};
+use crate::methods::{Arith, BinnedStream, Image, Method, catalog, hybrid_with, quantize};
 use crate::metrics::{Covered, Quality, compare, compare_covered};
 use crate::out::table::{HT_NOTE, header, spread};
 use crate::par;
@@ -36,7 +36,7 @@ pub fn tail_sums(binned: &BinnedStream, k: usize, arith: Arith) -> Result<Vec<Ta
                 .to_kernel()
                 .map_err(|e| format!("fragment {i}: {e}"))?;
             #[expect(clippy::cast_possible_truncation, reason = "pixel indices of a lab frame fit in u32")]
-            let row = arith.quantize(&fragment, p as u32);
+            let row = quantize(arith, &fragment, p as u32);
             if row.is_invisible() {
                 continue;
             }
