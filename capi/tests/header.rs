@@ -1,5 +1,6 @@
-//! `include/mlab.h` is what cbindgen generates from `src/lib.rs` with `cbindgen.toml`, byte
-//! for byte: a change of the API that is not in the checked-in header fails here.
+//! `include/mlab.h` is what cbindgen generates from `src/lib.rs` (and the modules it declares,
+//! in their order) with `cbindgen.toml`, byte for byte: a change of the API that is not in the
+//! checked-in header fails here.
 //! `MLAB_BLESS=1 cargo test -p mlab-capi --test header` rewrites the header.
 
 use std::path::Path;
@@ -13,7 +14,7 @@ fn header_is_generated_from_the_source() {
         .with_crate(dir)
         .with_config(config)
         .generate()
-        .expect("cbindgen parses src/lib.rs")
+        .expect("cbindgen parses src/lib.rs and its modules")
         .write(&mut generated);
     let path = dir.join("include/mlab.h");
     if std::env::var_os("MLAB_BLESS").is_some() {
@@ -22,7 +23,7 @@ fn header_is_generated_from_the_source() {
     let checked_in = std::fs::read(&path).expect("include/mlab.h");
     assert!(
         checked_in == generated,
-        "include/mlab.h differs from what cbindgen generates from src/lib.rs (MLAB_BLESS=1 \
+        "include/mlab.h differs from what cbindgen generates from src/ (MLAB_BLESS=1 \
          cargo test -p mlab-capi --test header rewrites it); generated:\n{}",
         String::from_utf8_lossy(&generated)
     );
