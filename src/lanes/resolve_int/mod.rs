@@ -17,7 +17,9 @@ use sse2 as int8;
 use ssse3 as int8;
 
 use super::{LANES, MlabSpan};
+use crate::resolve::int::IntBackground;
 use crate::row::Row;
+use crate::tail::TailFormat;
 
 /// The integer RGBA8 resolve of an MLAB span (layer-major).
 #[inline(always)]
@@ -39,6 +41,110 @@ pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize, const OPAQUE: b
         |j| core::array::from_fn(|p| pixels[p].get(j).copied().unwrap_or(Row::EMPTY)),
         bg,
     )
+}
+
+/// `$e` with the const `$opaque` true and `$bg` the background's channels for an opaque
+/// background, else with `$opaque` false and `$bg` zero: the background's case chosen once,
+/// outside the loops of the resolve it picks.
+macro_rules! by_background {
+    ($background:expr, |$opaque:ident, $bg:ident| $e:expr) => {
+        match $background {
+            Some($bg) => {
+                const $opaque: bool = true;
+                $e
+            }
+            None => {
+                const $opaque: bool = false;
+                let $bg = [0; 3];
+                $e
+            }
+        }
+    };
+}
+
+/// The integer RGBA8 resolve ([`mlab_resolve_rgba8`]) of 8 pixels stored pixel-major.
+#[inline(always)]
+pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
+    pixels: &[[Row; M]; LANES],
+    background: IntBackground,
+) -> [[u8; 4]; LANES] {
+    by_background!(background, |O, bg| mlab_resolve_pixel_major_rgba8_int::<M, O>(
+        pixels, bg
+    ))
+}
+
+/// [`mlab_resolve_pixel_major_rgba8`] of whole spans of pixel-major pixels into `out`, the
+/// background's case chosen once.
+#[inline(always)]
+pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
+    pixels: &[[[Row; M]; LANES]],
+    out: &mut [[[u8; 4]; LANES]],
+    background: IntBackground,
+) {
+    let pairs = out.iter_mut().zip(pixels);
+    by_background!(background, |O, bg| pairs
+        .for_each(|(o, p)| *o = mlab_resolve_pixel_major_rgba8_int::<M, O>(p, bg)))
+}
+
+/// [`mlab_resolve_rgba8`] of whole stored spans into `out`, the background's case chosen once.
+#[inline(always)]
+pub(crate) fn mlab_resolve_line_rgba8<const M: usize>(
+    spans: &[MlabSpan<M>],
+    out: &mut [[[u8; 4]; LANES]],
+    background: IntBackground,
+) {
+    let pairs = out.iter_mut().zip(spans);
+    by_background!(background, |O, bg| pairs
+        .for_each(|(o, s)| *o = mlab_resolve_rgba8_int::<M, O>(s, bg)))
+}
+
+/// The integer RGBA8 resolve of an MLAB span (`docs/layout.md`, "Integer resolve"; what
+/// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) writes for MLAB), in
+/// 16-bit lanes: byte-identical to the scalar `resolve::int::rgba8` of each pixel.
+#[inline(always)]
+pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: IntBackground) -> [[u8; 4]; LANES] {
+    by_background!(background, |O, bg| mlab_resolve_rgba8_int::<M, O>(span, bg))
+}
+
+/// The HT resolve of separate head layers and tails straight to RGBA8: the integer resolve
+/// (`docs/layout.md`, "Integer resolve of HT"), byte-identical to the scalar
+/// `resolve::int::ht_rgba8` of each pixel.
+#[inline(always)]
+pub(crate) fn hybrid_resolve_parts_rgba8<T: TailFormat, const K: usize>(
+    head: &[[Row; LANES]; K],
+    tails: &[T; LANES],
+    background: IntBackground,
+) -> [[u8; 4]; LANES] {
+    by_background!(background, |O, bg| ht::resolve::<T, K, O>(head, tails, bg))
+}
+
+/// [`hybrid_resolve_parts_rgba8`] of a span whose tails are all empty (every bit zero): the
+/// resolve of its head rows.
+#[inline(always)]
+pub(crate) fn hybrid_resolve_head_rgba8<const K: usize>(
+    head: &[[Row; LANES]; K],
+    background: IntBackground,
+) -> [[u8; 4]; LANES] {
+    by_background!(background, |O, bg| ht::resolve_head::<K, O>(head, bg))
+}
+
+/// [`hybrid_resolve_parts_rgba8`] of two spans at once: the same bytes, the two spans' tail
+/// dependency chains interleaved (HT's whole-line RGBA8 loop).
+#[inline(always)]
+pub(crate) fn hybrid_resolve_parts2_rgba8<T: TailFormat, const K: usize>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
+    background: IntBackground,
+) -> [[[u8; 4]; LANES]; 2] {
+    by_background!(background, |O, bg| ht::resolve2::<T, K, O>(spans, bg))
+}
+
+/// [`hybrid_resolve_parts_rgba8`] of four spans at once (as [`hybrid_resolve_parts2_rgba8`]).
+#[inline(always)]
+pub(crate) fn hybrid_resolve_parts4_rgba8<T: TailFormat, const K: usize>(
+    spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
+    background: IntBackground,
+) -> [[[u8; 4]; LANES]; 4] {
+    by_background!(background, |O, bg| ht::resolve4::<T, K, O>(spans, bg))
 }
 
 #[cfg(test)]
