@@ -34,9 +34,31 @@ pub struct Spans;
 /// A layer-major span: `N` layers of 8 rows.
 pub(crate) type Layers8<const N: usize> = [[Row; LANES]; N];
 
-/// What a span insert does to one unit of storage: `f(unit, rows, hashes, mask)`.
-pub(crate) trait InsertUnit: FnMut(&mut [Row], &[Row; LANES], &[u32; LANES], u8) {}
-impl<F: FnMut(&mut [Row], &[Row; LANES], &[u32; LANES], u8)> InsertUnit for F {}
+// The leaves below are traits, not closures or functions passed as values: a closure, or
+// a function through its `FnOnce` shim, holding Listing 1 was a call of its own in another
+// codegen unit (MLAB inserts 1.06-1.11x the instructions, callgrind x86-64-v3); a trait's
+// `#[inline(always)]` method is inlined.
+
+/// What a span insert does to one unit of storage (a kind's span insert).
+pub(crate) trait InsertUnit {
+    /// Insert `rows` for the lanes set in `mask` into `unit`.
+    fn insert(&self, unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8);
+}
+
+/// A kind's insert of one pixel: on its `H` head and `T` tail rows, or on its lane of a
+/// stored span.
+pub(crate) trait PixelLeaf<const H: usize, const T: usize> {
+    /// On the pixel's rows.
+    fn pixel(self, head: &mut [Row; H], tail: &mut [Row; T]);
+    /// On lane `lane` of a stored span.
+    fn lane(self, head: &mut Layers8<H>, tail: &mut Layers8<T>, lane: usize);
+}
+
+/// A kind's leaf on a layer-major span.
+pub(crate) trait SpanLeaf<const H: usize, const T: usize> {
+    /// On the span's head and tail layers.
+    fn span(self, head: &mut Layers8<H>, tail: &mut Layers8<T>);
+}
 
 /// How the pixels of a [`Grid`](super::Grid) are laid out: [`PixelMajor`] or [`Spans`]
 /// (sealed). The hidden items are the storage layer's index maths and views.
@@ -73,7 +95,7 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
         span: &[Row; LANES],
         hashes: &[u32; LANES],
         mask: u8,
-        f: impl InsertUnit,
+        f: &impl InsertUnit,
     );
     /// A span insert at an aligned span (checked when it was found): `f` on its unit.
     #[doc(hidden)]
@@ -85,11 +107,11 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
         span: &[Row; LANES],
         hashes: &[u32; LANES],
         mask: u8,
-        f: impl InsertUnit,
+        f: &impl InsertUnit,
     );
-    /// Pixel `(x, y)` (checked before) as `H` head and `T` tail slots: `pixel` on its rows
-    /// (borrowed pixel-major; gathered from its lane and written back in spans), or, in
-    /// spans where `lane_pays`, `lane` on its stored span and its lane.
+    /// Pixel `(x, y)` (checked before) as `H` head and `T` tail slots: the kind's
+    /// `leaf.pixel` on its rows (borrowed pixel-major; gathered from its lane and written
+    /// back in spans), or, in spans where `lane_pays`, `leaf.lane` on its stored span.
     #[doc(hidden)]
     fn pixel_mut<const H: usize, const T: usize>(
         rows: &mut [Row],
@@ -97,25 +119,26 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
         x: u32,
         y: u32,
         lane_pays: bool,
-        pixel: impl FnOnce(&mut [Row; H], &mut [Row; T]),
-        lane: impl FnOnce(&mut Layers8<H>, &mut Layers8<T>, usize),
+        leaf: impl PixelLeaf<H, T>,
     );
     /// `f` of the unit of one span as `H` head and `T` tail layers (lanes past pixel-major
-    /// pixels: empty rows, and `fill` in the tail layers); `None` if the unit is not one.
+    /// pixels: empty rows, and `fill` in the tail layers); `or()` if the unit is not one.
+    /// (Not an `Option`: returned through one, the resolves ran up to 1.17x the instructions.)
     #[doc(hidden)]
     fn layers<const H: usize, const T: usize, R>(
         unit: &[Row],
         fill: Row,
         f: impl FnOnce(&Layers8<H>, &Layers8<T>) -> R,
-    ) -> Option<R>;
-    /// [`layers`](Self::layers), mutable: a pixel-major unit's lanes set in `mask` are
-    /// scattered back.
+        or: impl FnOnce() -> R,
+    ) -> R;
+    /// [`layers`](Self::layers), mutable, for a kind's `leaf`: a pixel-major unit's lanes
+    /// set in `mask` are scattered back.
     #[doc(hidden)]
     fn layers_mut<const H: usize, const T: usize>(
         unit: &mut [Row],
         fill: Row,
         mask: u8,
-        f: impl FnOnce(&mut Layers8<H>, &mut Layers8<T>),
+        leaf: impl SpanLeaf<H, T>,
     );
     /// `span(layers)` of the unit of one span of `N` layers, or `pixels(px)` where it is 8
     /// whole pixel-major pixels (a kind's pixel-major cell, read without the transpose).
@@ -124,7 +147,8 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
         unit: &[Row],
         span: impl FnOnce(&Layers8<N>) -> R,
         pixels: impl FnOnce(&[[Row; N]; LANES]) -> R,
-    ) -> Option<R>;
+        or: impl FnOnce() -> R,
+    ) -> R;
     /// The whole spans of a line (`N` slots per pixel), as stored spans (`spans`) or as
     /// groups of 8 pixel-major pixels (`pixels`).
     #[doc(hidden)]
@@ -283,11 +307,11 @@ impl Arrangement for PixelMajor {
         span: &[Row; LANES],
         hashes: &[u32; LANES],
         mask: u8,
-        mut f: impl InsertUnit,
+        f: &impl InsertUnit,
     ) {
         let first = d.index_unchecked(x, y);
         if let Some(px) = rows.get_mut(first * n..(first + d.lanes_inside(x)) * n) {
-            f(px, span, hashes, mask);
+            f.insert(px, span, hashes, mask);
         }
     }
 
@@ -300,7 +324,7 @@ impl Arrangement for PixelMajor {
         span: &[Row; LANES],
         hashes: &[u32; LANES],
         mask: u8,
-        f: impl InsertUnit,
+        f: &impl InsertUnit,
     ) {
         Self::insert_span(rows, d, n, at.x, at.y, span, hashes, mask, f);
     }
@@ -312,14 +336,13 @@ impl Arrangement for PixelMajor {
         x: u32,
         y: u32,
         _: bool,
-        pixel: impl FnOnce(&mut [Row; H], &mut [Row; T]),
-        _: impl FnOnce(&mut Layers8<H>, &mut Layers8<T>, usize),
+        leaf: impl PixelLeaf<H, T>,
     ) {
         if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), H + T)
             && let Some((h, t)) = px.split_first_chunk_mut::<H>()
-            && let Ok(t) = <&mut [Row; T]>::try_from(t)
+            && let Some(t) = t.first_chunk_mut::<T>()
         {
-            pixel(h, t);
+            leaf.pixel(h, t);
         }
     }
 
@@ -328,9 +351,10 @@ impl Arrangement for PixelMajor {
         unit: &[Row],
         fill: Row,
         f: impl FnOnce(&Layers8<H>, &Layers8<T>) -> R,
-    ) -> Option<R> {
+        _: impl FnOnce() -> R,
+    ) -> R {
         let (head, tail) = gather::<H, T>(unit, fill);
-        Some(f(&head, &tail))
+        f(&head, &tail)
     }
 
     #[inline(always)]
@@ -338,10 +362,10 @@ impl Arrangement for PixelMajor {
         unit: &mut [Row],
         fill: Row,
         mask: u8,
-        f: impl FnOnce(&mut Layers8<H>, &mut Layers8<T>),
+        leaf: impl SpanLeaf<H, T>,
     ) {
         let (mut head, mut tail) = gather::<H, T>(unit, fill);
-        f(&mut head, &mut tail);
+        leaf.span(&mut head, &mut tail);
         scatter::<H, T>(unit, mask, &head, &tail);
     }
 
@@ -350,11 +374,12 @@ impl Arrangement for PixelMajor {
         unit: &[Row],
         span: impl FnOnce(&Layers8<N>) -> R,
         pixels: impl FnOnce(&[[Row; N]; LANES]) -> R,
-    ) -> Option<R> {
-        Some(match unit.as_chunks::<N>().0.try_into() {
+        _: impl FnOnce() -> R,
+    ) -> R {
+        match unit.as_chunks::<N>().0.try_into() {
             Ok(px) => pixels(px),
             Err(_) => span(&gather::<N, 0>(unit, Row::EMPTY).0),
-        })
+        }
     }
 
     #[inline(always)]
@@ -411,7 +436,7 @@ impl Arrangement for Spans {
         span: &[Row; LANES],
         hashes: &[u32; LANES],
         mask: u8,
-        mut f: impl InsertUnit,
+        f: &impl InsertUnit,
     ) {
         let (i, shift) = d.span_lane(x, y);
         let wide = (mask as u16) << shift;
@@ -424,12 +449,12 @@ impl Arrangement for Spans {
         if m0 != 0
             && let Some(s) = unit_mut(rows, i, LANES * n)
         {
-            f(s, &span, &hashes, m0);
+            f.insert(s, &span, &hashes, m0);
         }
         if m1 != 0
             && let Some(s) = unit_mut(rows, i + 1, LANES * n)
         {
-            f(s, &span, &hashes, m1);
+            f.insert(s, &span, &hashes, m1);
         }
     }
 
@@ -442,10 +467,10 @@ impl Arrangement for Spans {
         span: &[Row; LANES],
         hashes: &[u32; LANES],
         mask: u8,
-        mut f: impl InsertUnit,
+        f: &impl InsertUnit,
     ) {
         if let Some(s) = unit_mut(rows, at.index, LANES * n) {
-            f(s, span, hashes, mask);
+            f.insert(s, span, hashes, mask);
         }
     }
 
@@ -456,18 +481,17 @@ impl Arrangement for Spans {
         x: u32,
         y: u32,
         lane_pays: bool,
-        pixel: impl FnOnce(&mut [Row; H], &mut [Row; T]),
-        lane: impl FnOnce(&mut Layers8<H>, &mut Layers8<T>, usize),
+        leaf: impl PixelLeaf<H, T>,
     ) {
         let (i, l) = d.span_lane(x, y);
         let Some((head, tail)) = unit_mut(rows, i, LANES * (H + T)).and_then(split_span_mut::<H, T>) else {
             return;
         };
         if lane_pays {
-            lane(head, tail, l);
+            leaf.lane(head, tail, l);
         } else {
             let (mut h, mut t) = (lane_rows(head, l), lane_rows(tail, l));
-            pixel(&mut h, &mut t);
+            leaf.pixel(&mut h, &mut t);
             set_lane_rows(head, l, h);
             set_lane_rows(tail, l, t);
         }
@@ -478,8 +502,9 @@ impl Arrangement for Spans {
         unit: &[Row],
         _: Row,
         f: impl FnOnce(&Layers8<H>, &Layers8<T>) -> R,
-    ) -> Option<R> {
-        split_span::<H, T>(unit).map(|(h, t)| f(h, t))
+        or: impl FnOnce() -> R,
+    ) -> R {
+        split_span::<H, T>(unit).map_or_else(or, |(h, t)| f(h, t))
     }
 
     #[inline(always)]
@@ -487,10 +512,10 @@ impl Arrangement for Spans {
         unit: &mut [Row],
         _: Row,
         _: u8,
-        f: impl FnOnce(&mut Layers8<H>, &mut Layers8<T>),
+        leaf: impl SpanLeaf<H, T>,
     ) {
         if let Some((h, t)) = split_span_mut::<H, T>(unit) {
-            f(h, t);
+            leaf.span(h, t);
         }
     }
 
@@ -499,8 +524,9 @@ impl Arrangement for Spans {
         unit: &[Row],
         span: impl FnOnce(&Layers8<N>) -> R,
         _: impl FnOnce(&[[Row; N]; LANES]) -> R,
-    ) -> Option<R> {
-        as_layers::<N>(unit).map(span)
+        or: impl FnOnce() -> R,
+    ) -> R {
+        as_layers::<N>(unit).map_or_else(or, span)
     }
 
     #[inline(always)]

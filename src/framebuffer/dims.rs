@@ -20,7 +20,7 @@ pub(crate) struct Dims {
 /// storage, the span's unit), and the coordinates a pixel-major grid or a framebuffer of
 /// another crate inserts at. Public in a private module: a framebuffer of another crate can
 /// neither name nor build one, so the insert that takes it is crate-private.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SpanAt {
     pub(crate) index: usize,
     pub(crate) x: u32,
@@ -55,10 +55,12 @@ impl Dims {
         Ok(())
     }
 
-    /// The aligned span holding pixel `(x, y)` (checked before, [`check`](Self::check)).
+    /// The aligned span of the key `y << 32 | x / 8` of a pixel `(x, y)` checked before
+    /// ([`check`](Self::check)): the [`SpanBatcher`](crate::SpanBatcher)'s pending spans.
     #[inline(always)]
-    pub(crate) fn span_at(self, x: u32, y: u32) -> SpanAt {
-        let sx = x / LANES_U32;
+    #[expect(clippy::cast_possible_truncation, reason = "the key packs two u32: y << 32 | x / 8")]
+    pub(crate) fn span_at_key(self, key: u64) -> SpanAt {
+        let (sx, y) = (key as u32, (key >> 32) as u32);
         SpanAt {
             index: y as usize * self.spans + sx as usize,
             x: sx * LANES_U32,

@@ -7,7 +7,7 @@
 
 use core::marker::PhantomData;
 
-use super::arrangement::Arrangement;
+use super::arrangement::{Arrangement, InsertUnit};
 use super::dims::{Dims, SpanAt};
 use super::output::Output;
 use super::pixel::Pixel;
@@ -261,7 +261,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     ) -> Result<(), FramebufferError> {
         self.dims.check_span(x, y, mask)?;
         if mask != 0 {
-            L::insert_span(self.rows, self.dims, P::ROWS, x, y, rows, hashes, mask, P::insert_span::<L>);
+            L::insert_span(self.rows, self.dims, P::ROWS, x, y, rows, hashes, mask, &KindInsert::<P, L>(PhantomData));
         }
         Ok(())
     }
@@ -274,7 +274,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         hashes: &[u32; LANES],
         mask: u8,
     ) -> Result<(), FramebufferError> {
-        L::insert_span_at(self.rows, self.dims, P::ROWS, at, rows, hashes, mask, P::insert_span::<L>);
+        L::insert_span_at(self.rows, self.dims, P::ROWS, at, rows, hashes, mask, &KindInsert::<P, L>(PhantomData));
         Ok(())
     }
 
@@ -332,5 +332,15 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         };
         let second = self.first.wrapping_add(lines.wrapping_mul(self.dims.width));
         (band(a, lines, self.first), band(b, self.dims.height - lines, second))
+    }
+}
+
+/// The kind's span insert on one unit of storage in the arrangement `L`.
+struct KindInsert<P, L>(PhantomData<(P, L)>);
+
+impl<P: Pixel, L: Arrangement> InsertUnit for KindInsert<P, L> {
+    #[inline(always)]
+    fn insert(&self, unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
+        P::insert_span::<L>(unit, rows, hashes, mask);
     }
 }

@@ -130,17 +130,12 @@ impl Output for [f16; 4] {
         fb.resolve_span(span, y).unwrap_or(CLEAR_LANES).pixels(bg).map(to_rgba16f)
     }
 
-    /// Large stored spans convert through a call of their own: inlined into their whole-span
-    /// loop, the 32 conversions ran 6-7 % more instructions (HT K = 4, MLAB M = 8 spans;
-    /// smaller ones and pixel-major lose with the call; callgrind x86-64-v3).
+    /// The 32 conversions go through a call of their own: inlined into the whole-span loop,
+    /// they ran 6-7 % more instructions for large stored spans (HT K = 4, MLAB M = 8), and
+    /// 8-22 % more for every other size and arrangement (callgrind x86-64-v3).
     #[inline(always)]
     fn unit<P: Pixel, L: Arrangement>(unit: &[Row], bg: Background) -> [[f16; 4]; LANES] {
-        let r = P::resolve_f32::<L>(unit);
-        if L::SPANS && P::ROWS >= 5 {
-            rgba16f_lanes(&r, bg)
-        } else {
-            r.pixels(bg).map(to_rgba16f)
-        }
+        rgba16f_lanes(&P::resolve_f32::<L>(unit), bg)
     }
 
     fn clear<P: Pixel>(bg: Background) -> [[f16; 4]; LANES] {

@@ -10,7 +10,7 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::arrangement::{Arrangement, Layers8};
+use super::arrangement::{Arrangement, Layers8, PixelLeaf, SpanLeaf};
 use super::dims::Dims;
 use super::{CLEAR_LANES, Layers};
 use crate::arith::{Arithmetic, Unbiased};
@@ -107,6 +107,61 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     fn clear_int(background: Background) -> [[u8; 4]; LANES];
 }
 
+/// MLAB's insert of one row: Listing 1 on one pixel's rows, or on its lane of a stored span.
+#[derive(Clone, Copy)]
+struct MlabRow<A, const M: usize>(Row, u32, PhantomData<A>);
+
+impl<A: Arithmetic, const M: usize> PixelLeaf<M, 0> for MlabRow<A, M> {
+    #[inline(always)]
+    fn pixel(self, px: &mut [Row; M], _: &mut [Row; 0]) {
+        mlab::insert_hashed::<A, M>(px, self.0, self.1);
+    }
+
+    /// MLAB's one-lane cell (see [`MLAB_LANE_INSERT_PAYS`]).
+    #[inline(always)]
+    fn lane(self, span: &mut Layers8<M>, _: &mut Layers8<0>, lane: usize) {
+        lanes::mlab_insert_hashed::<A, M>(span, &[self.0; LANES], &[self.1; LANES], 1 << (lane % LANES));
+    }
+}
+
+/// MLAB's span insert: Listing 1 in lanes, for the lanes set in the mask.
+struct MlabSpan<'r, A, const M: usize>(&'r [Row; LANES], &'r [u32; LANES], u8, PhantomData<A>);
+
+impl<A: Arithmetic, const M: usize> SpanLeaf<M, 0> for MlabSpan<'_, A, M> {
+    #[inline(always)]
+    fn span(self, span: &mut Layers8<M>, _: &mut Layers8<0>) {
+        lanes::mlab_insert_hashed::<A, M>(span, self.0, self.1, self.2);
+    }
+}
+
+/// HT's insert of one row: Listing 2 on one pixel's head rows and tail slot (never a lane:
+/// one pixel does not pay for eight lanes, `docs/performance.md`).
+#[derive(Clone, Copy)]
+struct HtRow<A, const K: usize>(Row, PhantomData<A>);
+
+impl<A: Arithmetic, const K: usize> PixelLeaf<K, 1> for HtRow<A, K> {
+    #[inline(always)]
+    fn pixel(self, head: &mut [Row; K], [t]: &mut [Row; 1]) {
+        let mut tail = A::Tail::from_bytes(t.to_bytes());
+        hybrid::insert(head, &mut tail, self.0);
+        *t = Row::from_bytes(tail.to_bytes());
+    }
+
+    #[inline(always)]
+    fn lane(self, _: &mut Layers8<K>, _: &mut Layers8<1>, _: usize) {}
+}
+
+/// HT's span insert: Listing 2 in lanes on the head layers and tails, for the lanes set in
+/// the mask.
+struct HtSpan<'r, A, const K: usize>(&'r [Row; LANES], u8, PhantomData<A>);
+
+impl<A: Arithmetic, const K: usize> SpanLeaf<K, 1> for HtSpan<'_, A, K> {
+    #[inline(always)]
+    fn span(self, head: &mut Layers8<K>, [tails]: &mut Layers8<1>) {
+        lanes::hybrid_insert_parts(head, bytemuck::cast_mut::<_, [A::Tail; LANES]>(tails), self.0, self.1);
+    }
+}
+
 /// MLAB's measured cell for a pixel insert into span storage: with AVX, a span insert of one
 /// lane; without, the pixel's rows gathered, Listing 1 in scalar code, written back (the
 /// faster of the two on each, `docs/performance.md`). The same rows either way.
@@ -146,28 +201,19 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
 
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
     fn insert_pixel<L: Arrangement>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32) {
-        L::pixel_mut::<M, 0>(
-            rows,
-            d,
-            x,
-            y,
-            MLAB_LANE_INSERT_PAYS,
-            |px, _| mlab::insert_hashed::<A, M>(px, row, h),
-            |l, _, lane| lanes::mlab_insert_hashed::<A, M>(l, &[row; LANES], &[h; LANES], 1 << (lane % LANES)),
-        );
+        let leaf = MlabRow::<A, M>(row, h, PhantomData);
+        L::pixel_mut::<M, 0>(rows, d, x, y, MLAB_LANE_INSERT_PAYS, leaf);
     }
 
     #[inline(always)]
     fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
-        L::layers_mut::<M, 0>(unit, Row::EMPTY, mask, |l, _| {
-            lanes::mlab_insert_hashed::<A, M>(l, rows, hashes, mask);
-        });
+        L::layers_mut::<M, 0>(unit, Row::EMPTY, mask, MlabSpan::<A, M>(rows, hashes, mask, PhantomData));
     }
 
     /// 8 whole pixel-major pixels: MLAB's pixel-major cell, without the transpose.
     #[inline(always)]
     fn resolve_f32<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
-        L::layers_or_pixels::<M, _>(unit, lanes::mlab_resolve, lanes::mlab_resolve_pixel_major).unwrap_or(CLEAR_LANES)
+        L::layers_or_pixels::<M, _>(unit, lanes::mlab_resolve, lanes::mlab_resolve_pixel_major, || CLEAR_LANES)
     }
 
     /// 8 whole pixel-major pixels: MLAB's pixel-major cell, without the transpose.
@@ -175,7 +221,7 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     fn resolve_int<L: Arrangement>(unit: &[Row], bg: IntBackground) -> [[u8; 4]; LANES] {
         let span = |l: &Layers8<M>| lanes::mlab_resolve_rgba8(l, bg);
         let whole = |px: &[[Row; M]; LANES]| lanes::mlab_resolve_pixel_major_rgba8(px, bg);
-        L::layers_or_pixels::<M, _>(unit, span, whole).unwrap_or_else(|| span(&[[Row::EMPTY; LANES]; M]))
+        L::layers_or_pixels::<M, _>(unit, span, whole, || span(&[[Row::EMPTY; LANES]; M]))
     }
 
     /// The pixel-major line: MLAB's pixel-major cell, the pixels cast to `[[Row; M]; 8]` once
@@ -211,7 +257,17 @@ impl<const K: usize, A: Arithmetic> Ht<K, A> {
     /// gathered, empty rows and tails past them).
     #[inline(always)]
     fn view<L: Arrangement, R>(unit: &[Row], f: impl FnOnce(&Layers8<K>, &[A::Tail; LANES]) -> R) -> Option<R> {
-        L::layers::<K, 1, _>(unit, Self::empty_tail(), |h, [t]| f(h, bytemuck::cast_ref(t)))
+        L::layers::<K, 1, _>(unit, Self::empty_tail(), |h, [t]| Some(f(h, bytemuck::cast_ref(t))), || None)
+    }
+
+    /// [`view`](Self::view), `or()` where the unit is not a span.
+    #[inline(always)]
+    fn view_or<L: Arrangement, R>(
+        unit: &[Row],
+        f: impl FnOnce(&Layers8<K>, &[A::Tail; LANES]) -> R,
+        or: impl FnOnce() -> R,
+    ) -> R {
+        L::layers::<K, 1, _>(unit, Self::empty_tail(), |h, [t]| f(h, bytemuck::cast_ref(t)), or)
     }
 
     /// Whether every tail slot of the storage of one span in the arrangement `L` is empty
@@ -298,30 +354,23 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     /// in scalar code: one pixel does not pay for eight lanes (`docs/performance.md`).
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
     fn insert_pixel<L: Arrangement>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, _: u32) {
-        let pixel = |head: &mut [Row; K], [t]: &mut [Row; 1]| {
-            let mut tail = A::Tail::from_bytes(t.to_bytes());
-            hybrid::insert(head, &mut tail, row);
-            *t = Row::from_bytes(tail.to_bytes());
-        };
-        L::pixel_mut::<K, 1>(rows, d, x, y, false, pixel, |_, _, _| {});
+        L::pixel_mut::<K, 1>(rows, d, x, y, false, HtRow::<A, K>(row, PhantomData));
     }
 
     #[inline(always)]
     fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], _: &[u32; LANES], mask: u8) {
-        L::layers_mut::<K, 1>(unit, Self::empty_tail(), mask, |head, [tails]| {
-            lanes::hybrid_insert_parts(head, bytemuck::cast_mut::<_, [A::Tail; LANES]>(tails), rows, mask);
-        });
+        L::layers_mut::<K, 1>(unit, Self::empty_tail(), mask, HtSpan::<A, K>(rows, mask, PhantomData));
     }
 
     #[inline(always)]
     fn resolve_f32<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
-        Self::view::<L, _>(unit, |h, t| lanes::hybrid_resolve_parts(h, t)).unwrap_or(CLEAR_LANES)
+        Self::view_or::<L, _>(unit, |h, t| lanes::hybrid_resolve_parts(h, t), || CLEAR_LANES)
     }
 
     #[inline(always)]
     fn resolve_int<L: Arrangement>(unit: &[Row], bg: IntBackground) -> [[u8; 4]; LANES] {
         let f = |h: &Layers8<K>, t: &[A::Tail; LANES]| lanes::hybrid_resolve_parts_rgba8(h, t, bg);
-        Self::view::<L, _>(unit, f).unwrap_or_else(|| f(&[[Row::EMPTY; LANES]; K], &[A::Tail::EMPTY; LANES]))
+        Self::view_or::<L, _>(unit, f, || f(&[[Row::EMPTY; LANES]; K], &[A::Tail::EMPTY; LANES]))
     }
 
     /// Spans whose tails are all empty alone (their heads' resolve), the others in groups of
