@@ -357,7 +357,8 @@ fn copy_from_writes_the_padding_as_cleared() {
         let mut a = vec![Row::EMPTY; Grid::<P, PixelMajor>::rows_needed(w, h).unwrap()];
         let mut src = Grid::<P, PixelMajor>::new_cleared(&mut a, w, h).unwrap();
         for i in 0..20u32 {
-            src.insert_row(i * 7 % w, i % h, Row::new([i as u8, 3, 9], 100 + i as u8, i as f32)).unwrap();
+            src.insert_row(i * 7 % w, i % h, Row::new([i as u8, 3, 9], 100 + i as u8, i as f32))
+                .unwrap();
         }
         let n = Grid::<P, Spans>::rows_needed(w, h).unwrap();
         let (mut b, mut c) = (vec![fill; n], vec![Row::EMPTY; n]);
@@ -389,7 +390,11 @@ fn dyn_framebuffer_reads_and_copies_as_grid_does() {
     let (w, h) = (13, 2);
     for layers in [Layers::Mlab(3), Layers::Hybrid(2)] {
         let n = layers.rows_needed(w, h).unwrap();
-        let (mut a, mut b, mut c) = (vec![Row::EMPTY; n], vec![Row::from_bytes([0x5a; 8]); n], vec![Row::EMPTY; n]);
+        let (mut a, mut b, mut c) = (
+            vec![Row::EMPTY; n],
+            vec![Row::from_bytes([0x5a; 8]); n],
+            vec![Row::EMPTY; n],
+        );
         let mut src: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut a, w, h).unwrap();
         let mut typed = HybridSpanFramebuffer::<2>::new_cleared(&mut c, w, h).unwrap();
         for i in 0..30u32 {

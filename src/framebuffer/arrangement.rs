@@ -134,12 +134,7 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
     /// [`layers`](Self::layers), mutable, for a kind's `leaf`: a pixel-major unit's lanes
     /// set in `mask` are scattered back.
     #[doc(hidden)]
-    fn layers_mut<const H: usize, const T: usize>(
-        unit: &mut [Row],
-        fill: Row,
-        mask: u8,
-        leaf: impl SpanLeaf<H, T>,
-    );
+    fn layers_mut<const H: usize, const T: usize>(unit: &mut [Row], fill: Row, mask: u8, leaf: impl SpanLeaf<H, T>);
     /// `span(layers)` of the unit of one span of `N` layers, or `pixels(px)` where it is 8
     /// whole pixel-major pixels (a kind's pixel-major cell, read without the transpose).
     #[doc(hidden)]
@@ -255,13 +250,13 @@ fn scatter<const H: usize, const T: usize>(px: &mut [Row], mask: u8, head: &Laye
 /// not one taking a closure: a closure is a call where the caller is large
 /// (`DynFramebuffer`'s match over every size).
 #[inline(always)]
-fn lane_rows<const N: usize>(layers: &Layers8<N>, lane: usize) -> [Row; N] {
+pub(crate) fn lane_rows<const N: usize>(layers: &Layers8<N>, lane: usize) -> [Row; N] {
     core::array::from_fn(|j| layers[j].get(lane).copied().unwrap_or(Row::EMPTY))
 }
 
 /// Write back what [`lane_rows`] read.
 #[inline(always)]
-fn set_lane_rows<const N: usize>(layers: &mut Layers8<N>, lane: usize, px: [Row; N]) {
+pub(crate) fn set_lane_rows<const N: usize>(layers: &mut Layers8<N>, lane: usize, px: [Row; N]) {
     for (layer, r) in layers.iter_mut().zip(px) {
         if let Some(slot) = layer.get_mut(lane) {
             *slot = r;
@@ -358,12 +353,7 @@ impl Arrangement for PixelMajor {
     }
 
     #[inline(always)]
-    fn layers_mut<const H: usize, const T: usize>(
-        unit: &mut [Row],
-        fill: Row,
-        mask: u8,
-        leaf: impl SpanLeaf<H, T>,
-    ) {
+    fn layers_mut<const H: usize, const T: usize>(unit: &mut [Row], fill: Row, mask: u8, leaf: impl SpanLeaf<H, T>) {
         let (mut head, mut tail) = gather::<H, T>(unit, fill);
         leaf.span(&mut head, &mut tail);
         scatter::<H, T>(unit, mask, &head, &tail);
@@ -508,12 +498,7 @@ impl Arrangement for Spans {
     }
 
     #[inline(always)]
-    fn layers_mut<const H: usize, const T: usize>(
-        unit: &mut [Row],
-        _: Row,
-        _: u8,
-        leaf: impl SpanLeaf<H, T>,
-    ) {
+    fn layers_mut<const H: usize, const T: usize>(unit: &mut [Row], _: Row, _: u8, leaf: impl SpanLeaf<H, T>) {
         if let Some((h, t)) = split_span_mut::<H, T>(unit) {
             leaf.span(h, t);
         }

@@ -261,7 +261,17 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     ) -> Result<(), FramebufferError> {
         self.dims.check_span(x, y, mask)?;
         if mask != 0 {
-            L::insert_span(self.rows, self.dims, P::ROWS, x, y, rows, hashes, mask, &KindInsert::<P, L>(PhantomData));
+            L::insert_span(
+                self.rows,
+                self.dims,
+                P::ROWS,
+                x,
+                y,
+                rows,
+                hashes,
+                mask,
+                &KindInsert::<P, L>(PhantomData),
+            );
         }
         Ok(())
     }
@@ -274,7 +284,16 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
         hashes: &[u32; LANES],
         mask: u8,
     ) -> Result<(), FramebufferError> {
-        L::insert_span_at(self.rows, self.dims, P::ROWS, at, rows, hashes, mask, &KindInsert::<P, L>(PhantomData));
+        L::insert_span_at(
+            self.rows,
+            self.dims,
+            P::ROWS,
+            at,
+            rows,
+            hashes,
+            mask,
+            &KindInsert::<P, L>(PhantomData),
+        );
         Ok(())
     }
 

@@ -127,7 +127,10 @@ impl Output for [f16; 4] {
 
     #[inline]
     fn span<F: Framebuffer + ?Sized>(fb: &F, span: u32, y: u32, bg: Background) -> [[f16; 4]; LANES] {
-        fb.resolve_span(span, y).unwrap_or(CLEAR_LANES).pixels(bg).map(to_rgba16f)
+        fb.resolve_span(span, y)
+            .unwrap_or(CLEAR_LANES)
+            .pixels(bg)
+            .map(to_rgba16f)
     }
 
     /// The 32 conversions go through a call of their own: inlined into the whole-span loop,

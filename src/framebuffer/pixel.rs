@@ -10,7 +10,7 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::arrangement::{Arrangement, Layers8, PixelLeaf, SpanLeaf};
+use super::arrangement::{Arrangement, Layers8, PixelLeaf, SpanLeaf, lane_rows, set_lane_rows};
 use super::dims::Dims;
 use super::{CLEAR_LANES, Layers};
 use crate::arith::{Arithmetic, Unbiased};
@@ -134,8 +134,10 @@ impl<A: Arithmetic, const M: usize> SpanLeaf<M, 0> for MlabSpan<'_, A, M> {
     }
 }
 
-/// HT's insert of one row: Listing 2 on one pixel's head rows and tail slot (never a lane:
-/// one pixel does not pay for eight lanes, `docs/performance.md`).
+/// HT's insert of one row: Listing 2 in scalar code on one pixel's head rows and tail slot,
+/// or on its lane of a stored span, its head rows gathered and the tail in place (one pixel
+/// does not pay for eight lanes, `docs/performance.md`; the tail gathered as well: 1.035x
+/// the instructions).
 #[derive(Clone, Copy)]
 struct HtRow<A, const K: usize>(Row, PhantomData<A>);
 
@@ -148,7 +150,14 @@ impl<A: Arithmetic, const K: usize> PixelLeaf<K, 1> for HtRow<A, K> {
     }
 
     #[inline(always)]
-    fn lane(self, _: &mut Layers8<K>, _: &mut Layers8<1>, _: usize) {}
+    fn lane(self, head: &mut Layers8<K>, [tails]: &mut Layers8<1>, lane: usize) {
+        let tails = bytemuck::cast_mut::<_, [A::Tail; LANES]>(tails);
+        if let Some(tail) = tails.get_mut(lane) {
+            let mut px = lane_rows(head, lane);
+            hybrid::insert(&mut px, tail, self.0);
+            set_lane_rows(head, lane, px);
+        }
+    }
 }
 
 /// HT's span insert: Listing 2 in lanes on the head layers and tails, for the lanes set in
@@ -207,13 +216,20 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
 
     #[inline(always)]
     fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
-        L::layers_mut::<M, 0>(unit, Row::EMPTY, mask, MlabSpan::<A, M>(rows, hashes, mask, PhantomData));
+        L::layers_mut::<M, 0>(
+            unit,
+            Row::EMPTY,
+            mask,
+            MlabSpan::<A, M>(rows, hashes, mask, PhantomData),
+        );
     }
 
     /// 8 whole pixel-major pixels: MLAB's pixel-major cell, without the transpose.
     #[inline(always)]
     fn resolve_f32<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
-        L::layers_or_pixels::<M, _>(unit, lanes::mlab_resolve, lanes::mlab_resolve_pixel_major, || CLEAR_LANES)
+        L::layers_or_pixels::<M, _>(unit, lanes::mlab_resolve, lanes::mlab_resolve_pixel_major, || {
+            CLEAR_LANES
+        })
     }
 
     /// 8 whole pixel-major pixels: MLAB's pixel-major cell, without the transpose.
@@ -257,7 +273,12 @@ impl<const K: usize, A: Arithmetic> Ht<K, A> {
     /// gathered, empty rows and tails past them).
     #[inline(always)]
     fn view<L: Arrangement, R>(unit: &[Row], f: impl FnOnce(&Layers8<K>, &[A::Tail; LANES]) -> R) -> Option<R> {
-        L::layers::<K, 1, _>(unit, Self::empty_tail(), |h, [t]| Some(f(h, bytemuck::cast_ref(t))), || None)
+        L::layers::<K, 1, _>(
+            unit,
+            Self::empty_tail(),
+            |h, [t]| Some(f(h, bytemuck::cast_ref(t))),
+            || None,
+        )
     }
 
     /// [`view`](Self::view), `or()` where the unit is not a span.
@@ -290,7 +311,9 @@ impl<const K: usize, A: Arithmetic> Ht<K, A> {
         bg: IntBackground,
     ) -> Option<[[[u8; 4]; LANES]; 2]> {
         Self::view::<L, _>(at(i0), |h0, t0| {
-            Self::view::<L, _>(at(i1), |h1, t1| lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg))
+            Self::view::<L, _>(at(i1), |h1, t1| {
+                lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg)
+            })
         })
         .flatten()
     }
@@ -354,7 +377,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     /// in scalar code: one pixel does not pay for eight lanes (`docs/performance.md`).
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
     fn insert_pixel<L: Arrangement>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, _: u32) {
-        L::pixel_mut::<K, 1>(rows, d, x, y, false, HtRow::<A, K>(row, PhantomData));
+        L::pixel_mut::<K, 1>(rows, d, x, y, true, HtRow::<A, K>(row, PhantomData));
     }
 
     #[inline(always)]
