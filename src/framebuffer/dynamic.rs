@@ -191,7 +191,7 @@ impl<'a, A: Arithmetic> DynFramebuffer<'a, A> {
     /// for HT, its tail.
     ///
     /// ```
-    /// use mlab::{DynFramebuffer, Framebuffer, Layers, Row, Tail};
+    /// use mlab::{DynFramebuffer, Framebuffer, Layers, Row, Tail, TailFormat};
     /// let layers = Layers::Hybrid(2);
     /// let mut storage = vec![Row::EMPTY; layers.rows_needed(9, 1)?];
     /// let mut fb: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut storage, 9, 1)?;

@@ -386,6 +386,10 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     }
 
     #[inline(always)]
+    #[expect(
+        clippy::redundant_closure,
+        reason = "measured as a closure; the function as a value is called through its FnOnce shim"
+    )]
     fn resolve_f32<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
         Self::view_or::<L, _>(unit, |h, t| lanes::hybrid_resolve_parts(h, t), || CLEAR_LANES)
     }
