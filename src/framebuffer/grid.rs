@@ -312,7 +312,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     }
 
     /// Whole spans from their line's rows (no per-span index maths or bounds checks), the
-    /// partial last spans through [`span_as`](Self::span_as); span by span where the kind's
+    /// partial last spans through `span_as`; span by span where the kind's
     /// pixel-major line loop does not pay ([`Pixel::PIXEL_MAJOR_LINE_LOOP`]).
     fn resolve_as<O: Output>(&self, out: &mut [O], bg: Background) -> Result<(), FramebufferError> {
         let b = O::background(bg);
