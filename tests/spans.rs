@@ -346,3 +346,79 @@ fn a_band_rebuilt_with_its_first_pixel_inserts_the_whole_framebuffers_bytes() {
     check::<Mlab<3>, PixelMajor>();
     check::<Ht<1>, PixelMajor>();
 }
+
+/// `copy_from` defines the whole storage: into a grid made with `new` over storage that held
+/// anything (here `Row::EMPTY`, which is not an empty HT tail, and arbitrary bytes), the rows
+/// are those of `new_cleared` then `copy_from` (13 x 2: padding lanes in every span line).
+#[test]
+fn copy_from_writes_the_padding_as_cleared() {
+    fn check<P: Pixel>(fill: Row) {
+        let (w, h) = (13, 2);
+        let mut a = vec![Row::EMPTY; Grid::<P, PixelMajor>::rows_needed(w, h).unwrap()];
+        let mut src = Grid::<P, PixelMajor>::new_cleared(&mut a, w, h).unwrap();
+        for i in 0..20u32 {
+            src.insert_row(i * 7 % w, i % h, Row::new([i as u8, 3, 9], 100 + i as u8, i as f32))
+                .unwrap();
+        }
+        let n = Grid::<P, Spans>::rows_needed(w, h).unwrap();
+        let (mut b, mut c) = (vec![fill; n], vec![Row::EMPTY; n]);
+        let mut kept = Grid::<P, Spans>::new(&mut b, w, h).unwrap();
+        kept.copy_from(&src).unwrap();
+        let mut cleared = Grid::<P, Spans>::new_cleared(&mut c, w, h).unwrap();
+        cleared.copy_from(&src).unwrap();
+        assert_eq!(kept.as_rows(), cleared.as_rows(), "{:?}", P::LAYERS);
+        // And back: pixel-major storage over anything.
+        let mut d = vec![fill; a_len::<P>(w, h)];
+        let mut back = Grid::<P, PixelMajor>::new(&mut d, w, h).unwrap();
+        back.copy_from(&kept).unwrap();
+        assert_eq!(back.as_rows(), src.as_rows(), "{:?}", P::LAYERS);
+    }
+    fn a_len<P: Pixel>(w: u32, h: u32) -> usize {
+        Grid::<P, PixelMajor>::rows_needed(w, h).unwrap()
+    }
+    for fill in [Row::EMPTY, Row::from_bytes([0xab; 8])] {
+        check::<Ht<3>>(fill);
+        check::<Ht<1, mlab::Paper>>(fill);
+        check::<Mlab<2>>(fill);
+    }
+}
+
+/// `DynFramebuffer` has the `Grid` reads and copies: `pixel`, `copy_from`, `saturated_pixels`.
+#[test]
+fn dyn_framebuffer_reads_and_copies_as_grid_does() {
+    use mlab::{DynFramebuffer, Layers};
+    let (w, h) = (13, 2);
+    for layers in [Layers::Mlab(3), Layers::Hybrid(2)] {
+        let n = layers.rows_needed(w, h).unwrap();
+        let (mut a, mut b, mut c) = (
+            vec![Row::EMPTY; n],
+            vec![Row::from_bytes([0x5a; 8]); n],
+            vec![Row::EMPTY; n],
+        );
+        let mut src: DynFramebuffer = DynFramebuffer::new_cleared(layers, &mut a, w, h).unwrap();
+        let mut typed = HybridSpanFramebuffer::<2>::new_cleared(&mut c, w, h).unwrap();
+        for i in 0..30u32 {
+            let row = Row::new([i as u8, 3, 9], 10 + i as u8, i as f32);
+            src.insert_row(i * 5 % w, i % h, row).unwrap();
+            typed.insert_row(i * 5 % w, i % h, row).unwrap();
+        }
+        let mut dst: DynFramebuffer = DynFramebuffer::new(layers, &mut b, w, h).unwrap();
+        dst.copy_from(&src).unwrap();
+        assert_eq!(dst.as_rows(), src.as_rows());
+        assert_eq!(dst.saturated_pixels(), 0);
+        let px = dst.pixel(12, 1).unwrap();
+        assert_eq!(px.layers(), layers);
+        if layers == Layers::Hybrid(2) {
+            let (head, tail) = typed.pixel(12, 1).unwrap();
+            assert_eq!(px.rows(), &head);
+            assert_eq!(px.tail(), Some(tail));
+        } else {
+            assert_eq!(px.rows().len(), 3);
+            assert_eq!(px.tail(), None);
+        }
+        assert!(dst.pixel(13, 0).is_err());
+        let mut other = vec![Row::EMPTY; Layers::Mlab(1).rows_needed(w, h).unwrap()];
+        let one: DynFramebuffer = DynFramebuffer::new_cleared(Layers::Mlab(1), &mut other, w, h).unwrap();
+        assert_eq!(dst.copy_from(&one), Err(FramebufferError::SizeMismatch));
+    }
+}

@@ -1,213 +1,26 @@
 //! [`Grid`]: one framebuffer type over caller-owned rows, generic over what a pixel holds
 //! ([`Pixel`]: [`Mlab`](super::Mlab), [`Ht`](super::Ht)) and how pixels are laid out
-//! ([`Arrangement`]: [`PixelMajor`], [`Spans`]). The arrangements own the index maths,
-//! bounds, span rotation and line splits, written once for both kinds; the kinds' leaves
-//! (`pixel.rs`) are the only code that knows `M`, `K` or the tail.
+//! ([`Arrangement`]: [`PixelMajor`](super::PixelMajor), [`Spans`](super::Spans)): its
+//! constructors, pixel reads, copies and the [`Framebuffer`] impl, each written once. The
+//! geometry and checks are [`Dims`]'s, the layouts the arrangements', the per-kind leaves
+//! the kinds' (`pixel.rs`), the formats [`Output`]'s.
 
-use core::fmt::Debug;
 use core::marker::PhantomData;
 
+use super::arrangement::{Arrangement, InsertUnit};
+use super::dims::{Dims, SpanAt};
+use super::output::Output;
 use super::pixel::Pixel;
-use super::{CLEAR_LANES, Dims, Framebuffer, FramebufferError, write_lines, write_spans};
-use crate::lanes::{self, LANES, LANES_U32, ResolvedLanes};
+use super::write::{write_lines, write_spans};
+use super::{Framebuffer, FramebufferError};
+use crate::lanes::{self, LANES, ResolvedLanes};
 use crate::mlab::row_hash;
-use crate::resolve::{Background, Resolved, int, to_rgba16f};
+use crate::resolve::{Background, Resolved};
 use crate::row::Row;
-use glam::Vec4;
-use half::f16;
-
-impl crate::sealed::Sealed for PixelMajor {}
-impl crate::sealed::Sealed for Spans {}
-
-/// Pixel-major storage: pixel `(x, y)` owns the rows
-/// `[(y * width + x) * R, (y * width + x + 1) * R)`, `R` = [`Pixel::ROWS`] (an HT pixel's last slot holds its tail's bytes).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct PixelMajor;
-
-/// 8-pixel spans, layer-major: slot `j` of pixel `(x, y)` is row
-/// `((y * spans + x / 8) * R + j) * 8 + x % 8`, `spans = ceil(width / 8)`; for HT the `K`
-/// head layers come first, then the 8 tails. Lanes past the right edge are padding (kept empty).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
-pub struct Spans;
-
-/// How the pixels of a [`Grid`] are laid out: [`PixelMajor`] or [`Spans`] (sealed). The
-/// hidden items are the storage layer's index maths.
-// `Dims` is the crate's own: the trait is sealed, no other crate implements or calls it.
-#[allow(private_interfaces)]
-pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + Sync + 'static {
-    /// Whether pixels are stored in 8-pixel layer-major spans.
-    const SPANS: bool;
-    #[doc(hidden)]
-    fn line_rows(d: Dims, rows: usize) -> Option<usize>;
-    /// Storage index of slot `j` of pixel `(x, y)` (checked before), `n` slots per pixel.
-    #[doc(hidden)]
-    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize;
-    /// Which slot of its pixel storage index `i` holds, `n` slots per pixel.
-    #[doc(hidden)]
-    fn slot_of(i: usize, n: usize) -> usize;
-    #[doc(hidden)]
-    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32);
-    #[doc(hidden)]
-    fn insert_span<P: Pixel>(
-        rows: &mut [Row],
-        d: Dims,
-        x: u32,
-        y: u32,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-    );
-    /// The storage of span `span` of line `y` (1 to 8 consecutive pixels, or one stored
-    /// span), if it exists.
-    #[doc(hidden)]
-    fn span_unit(rows: &[Row], d: Dims, rows_per_pixel: usize, span: u32, y: u32) -> Option<&[Row]>;
-}
-
-/// Unit `i` of `n` rows.
-#[inline(always)]
-fn unit(rows: &[Row], i: usize, n: usize) -> Option<&[Row]> {
-    rows.get(i * n..(i + 1) * n)
-}
-
-/// Unit `i` of `n` rows, mutable.
-#[inline(always)]
-fn unit_mut(rows: &mut [Row], i: usize, n: usize) -> Option<&mut [Row]> {
-    rows.get_mut(i * n..(i + 1) * n)
-}
-
-/// The lanes of a span insert, rotated so that lane `i` sits at `(i + shift) % 8`.
-fn rotate<T: Copy>(rows: &[T; LANES], shift: usize) -> [T; LANES] {
-    let mut r = *rows;
-    r.rotate_right(shift);
-    r
-}
-
-/// `out[i] = f(unit i of line)`, for the whole 8-pixel units of a line's rows.
-#[inline(always)]
-fn units<P: Pixel, T>(line: &[Row], out: &mut [[T; LANES]], f: impl Fn(&[Row]) -> [T; LANES]) {
-    for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * P::ROWS)) {
-        *o = f(u);
-    }
-}
-
-#[allow(private_interfaces)]
-impl Arrangement for PixelMajor {
-    const SPANS: bool = false;
-
-    fn line_rows(d: Dims, rows: usize) -> Option<usize> {
-        (d.width as usize).checked_mul(rows)
-    }
-
-    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize {
-        d.index_unchecked(x, y) * n + j
-    }
-
-    fn slot_of(i: usize, n: usize) -> usize {
-        i % n
-    }
-
-    #[inline(always)]
-    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32) {
-        if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), P::ROWS) {
-            P::pm_insert(px, row, h);
-        }
-    }
-
-    #[inline(always)]
-    fn insert_span<P: Pixel>(
-        rows: &mut [Row],
-        d: Dims,
-        x: u32,
-        y: u32,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-    ) {
-        let first = d.index_unchecked(x, y);
-        let valid = d.lanes_inside(x);
-        if let Some(px) = rows.get_mut(first * P::ROWS..(first + valid) * P::ROWS) {
-            P::insert_unit::<Self>(px, span, hashes, mask);
-        }
-    }
-
-    #[inline(always)]
-    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]> {
-        let x = span.checked_mul(LANES_U32).filter(|&x| x < d.width && y < d.height)?;
-        let first = d.index_unchecked(x, y);
-        rows.get(first * n..(first + d.lanes_inside(x)) * n)
-    }
-}
-
-#[allow(private_interfaces)]
-impl Arrangement for Spans {
-    const SPANS: bool = true;
-
-    fn line_rows(d: Dims, rows: usize) -> Option<usize> {
-        d.spans.checked_mul(LANES)?.checked_mul(rows)
-    }
-
-    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize {
-        let (i, lane) = d.span_lane(x, y);
-        (i * n + j) * LANES + lane
-    }
-
-    fn slot_of(i: usize, n: usize) -> usize {
-        i / LANES % n
-    }
-
-    #[inline(always)]
-    fn insert<P: Pixel>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32) {
-        let (i, lane) = d.span_lane(x, y);
-        if let Some(s) = unit_mut(rows, i, LANES * P::ROWS) {
-            P::span_insert(s, lane, row, h);
-        }
-    }
-
-    /// A span at `x` not a multiple of 8 touches two stored spans: lane `i` lands on lane
-    /// `(i + x % 8) % 8`, of the first if `i + x % 8 < 8`, of the next one otherwise.
-    #[inline(always)]
-    #[expect(
-        clippy::cast_possible_truncation,
-        reason = "the two bytes of the mask shifted into 16 bits"
-    )]
-    fn insert_span<P: Pixel>(
-        rows: &mut [Row],
-        d: Dims,
-        x: u32,
-        y: u32,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-    ) {
-        let (i, shift) = d.span_lane(x, y);
-        let wide = (mask as u16) << shift;
-        let (m0, m1) = (wide as u8, (wide >> 8) as u8);
-        let (span, hashes) = if shift == 0 {
-            (*span, *hashes)
-        } else {
-            (rotate(span, shift), rotate(hashes, shift))
-        };
-        if m0 != 0
-            && let Some(s) = unit_mut(rows, i, LANES * P::ROWS)
-        {
-            P::insert_unit::<Self>(s, &span, &hashes, m0);
-        }
-        if m1 != 0
-            && let Some(s) = unit_mut(rows, i + 1, LANES * P::ROWS)
-        {
-            P::insert_unit::<Self>(s, &span, &hashes, m1);
-        }
-    }
-
-    #[inline(always)]
-    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]> {
-        unit(rows, d.span_index(span, y)?, LANES * n)
-    }
-}
 
 /// A framebuffer over caller-owned rows: `width x height` pixels of the kind `P` ([`Mlab`](super::Mlab) or
-/// [`Ht`](super::Ht), with their size and arithmetic) in the arrangement `L` ([`PixelMajor`] or
-/// [`Spans`]). Usually named by its aliases: [`MlabFramebuffer`](super::MlabFramebuffer),
+/// [`Ht`](super::Ht), with their size and arithmetic) in the arrangement `L` ([`PixelMajor`](super::PixelMajor) or
+/// [`Spans`](super::Spans)). Usually named by its aliases: [`MlabFramebuffer`](super::MlabFramebuffer),
 /// [`HybridFramebuffer`](super::HybridFramebuffer), [`SpanFramebuffer`](super::SpanFramebuffer),
 /// [`HybridSpanFramebuffer`](super::HybridSpanFramebuffer). Its operations are those of
 /// [`Framebuffer`]; the storage layouts are specified in `docs/layout.md`.
@@ -240,9 +53,7 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
     /// `ceil(width / 8) * 8 * height * R` in spans (`R` = [`Pixel::ROWS`]).
     pub fn rows_needed(width: u32, height: u32) -> Result<usize, FramebufferError> {
         let d = Dims::new(width, height);
-        L::line_rows(d, P::ROWS)
-            .and_then(|r| r.checked_mul(height as usize))
-            .ok_or(FramebufferError::SizeOverflow)
+        d.rows_needed(L::line_rows(d, P::ROWS))
     }
 
     /// A view over `storage`, which must hold exactly [`rows_needed`](Self::rows_needed)
@@ -250,13 +61,7 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
     /// [`Row::EMPTY`] is not a cleared HT framebuffer** (an empty row's bytes are not an empty
     /// tail): start a frame with [`new_cleared`](Self::new_cleared).
     pub fn new(storage: &'a mut [Row], width: u32, height: u32) -> Result<Self, FramebufferError> {
-        let expected = Self::rows_needed(width, height)?;
-        if storage.len() != expected {
-            return Err(FramebufferError::StorageLength {
-                expected,
-                actual: storage.len(),
-            });
-        }
+        Dims::check_storage(Self::rows_needed(width, height)?, storage.len())?;
         Ok(Grid {
             rows: storage,
             dims: Dims::new(width, height),
@@ -310,21 +115,13 @@ impl<'a, P: Pixel, L: Arrangement> Grid<'a, P, L> {
     }
 
     /// Overwrite every pixel with those of `other` (same kind and size, any arrangement):
-    /// between pixel-major and spans, losslessly.
+    /// between pixel-major and spans, losslessly. The whole storage is written: padding
+    /// lanes of span storage as [`clear`](Framebuffer::clear) writes them, so that the rows
+    /// are those of a cleared framebuffer into which the pixels were inserted, whatever the
+    /// storage held before.
     pub fn copy_from<L2: Arrangement>(&mut self, other: &Grid<'_, P, L2>) -> Result<(), FramebufferError> {
-        if (other.dims.width, other.dims.height) != (self.dims.width, self.dims.height) {
-            return Err(FramebufferError::SizeMismatch);
-        }
-        for y in 0..self.dims.height {
-            for x in 0..self.dims.width {
-                let (d, rows) = (self.dims, &mut *self.rows);
-                P::to_slots(other.get(x, y), |j, r| {
-                    if let Some(slot) = rows.get_mut(L::slot(d, P::ROWS, x, y, j)) {
-                        *slot = r;
-                    }
-                });
-            }
-        }
+        self.dims.check_same(other.dims)?;
+        self.copy_pixels(|x, y| other.get(x, y));
         Ok(())
     }
 
@@ -350,25 +147,46 @@ impl<P: Pixel, L: Arrangement> Grid<'_, P, L> {
         })
     }
 
-    /// Span `span` of line `y` resolved, clear where it does not exist.
-    fn lanes(&self, span: u32, y: u32) -> ResolvedLanes {
-        self.resolve_span(span, y).unwrap_or(CLEAR_LANES)
+    /// Clear (the padding too), then write every pixel `(x, y)` as `value(x, y)`.
+    fn copy_pixels(&mut self, value: impl Fn(u32, u32) -> P::Value) {
+        self.clear();
+        let d = self.dims;
+        for y in 0..d.height {
+            for x in 0..d.width {
+                let rows = &mut *self.rows;
+                P::to_slots(value(x, y), |j, r| {
+                    if let Some(slot) = rows.get_mut(L::slot(d, P::ROWS, x, y, j)) {
+                        *slot = r;
+                    }
+                });
+            }
+        }
     }
 
-    /// Write a whole-frame resolve: whole spans by `whole` from their line's rows (no
-    /// per-span index maths or bounds checks), partial last spans by `edge`.
-    #[inline(always)]
-    fn write<T: Copy>(
-        &self,
-        out: &mut [T],
-        whole: impl Fn(&[Row], &mut [[T; LANES]]),
-        edge: impl Fn(u32, u32) -> [T; LANES],
+    /// [`copy_from`](Grid::copy_from) of a grid of the same kind in the arrangement `L2`
+    /// given by its size and rows.
+    pub(crate) fn copy_from_rows<L2: Arrangement>(
+        &mut self,
+        width: u32,
+        height: u32,
+        src: &[Row],
     ) -> Result<(), FramebufferError> {
-        if !(L::SPANS || P::PIXEL_MAJOR_LINE_LOOP) {
-            return write_spans(self.dims, out, edge);
+        let d = Dims::new(width, height);
+        self.dims.check_same(d)?;
+        self.copy_pixels(|x, y| {
+            P::from_slots(|j| src.get(L2::slot(d, P::ROWS, x, y, j)).copied().unwrap_or(Row::EMPTY))
+        });
+        Ok(())
+    }
+
+    /// Span `span` of line `y` in the format `O` (`b`: `bg` prepared), empty pixels where it
+    /// does not exist.
+    #[inline(always)]
+    fn span_as<O: Output>(&self, span: u32, y: u32, bg: Background, b: O::Bg) -> [O; LANES] {
+        match L::span_unit(self.rows, self.dims, P::ROWS, span, y) {
+            Some(u) => O::unit::<P, L>(u, b),
+            None => O::clear::<P>(bg),
         }
-        let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
-        write_lines(self.dims, out, self.rows, line_rows, whole, edge)
     }
 }
 
@@ -428,7 +246,7 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     #[inline(always)]
     fn insert_hashed(&mut self, x: u32, y: u32, row: Row, h: u32) -> Result<(), FramebufferError> {
         self.dims.check(x, y)?;
-        L::insert::<P>(self.rows, self.dims, x, y, row, h);
+        P::insert_pixel::<L>(self.rows, self.dims, x, y, row, h);
         Ok(())
     }
 
@@ -443,8 +261,39 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     ) -> Result<(), FramebufferError> {
         self.dims.check_span(x, y, mask)?;
         if mask != 0 {
-            L::insert_span::<P>(self.rows, self.dims, x, y, rows, hashes, mask);
+            L::insert_span(
+                self.rows,
+                self.dims,
+                P::ROWS,
+                x,
+                y,
+                rows,
+                hashes,
+                mask,
+                &KindInsert::<P, L>(PhantomData),
+            );
         }
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn insert_span_at(
+        &mut self,
+        at: SpanAt,
+        rows: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    ) -> Result<(), FramebufferError> {
+        L::insert_span_at(
+            self.rows,
+            self.dims,
+            P::ROWS,
+            at,
+            rows,
+            hashes,
+            mask,
+            &KindInsert::<P, L>(PhantomData),
+        );
         Ok(())
     }
 
@@ -454,42 +303,26 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
 
     #[inline]
     fn resolve_span(&self, span: u32, y: u32) -> Option<ResolvedLanes> {
-        L::span_unit(self.rows, self.dims, P::ROWS, span, y).map(P::resolve_unit::<L>)
+        L::span_unit(self.rows, self.dims, P::ROWS, span, y).map(P::resolve_f32::<L>)
     }
 
     #[inline]
     fn resolve_span_rgba8(&self, span: u32, y: u32, background: Background) -> [[u8; 4]; LANES] {
-        match L::span_unit(self.rows, self.dims, P::ROWS, span, y) {
-            Some(u) => P::resolve_unit_rgba8::<L>(u, int::background(background)),
-            None => P::clear_rgba8(background),
+        self.span_as::<[u8; 4]>(span, y, background, <[u8; 4]>::background(background))
+    }
+
+    /// Whole spans from their line's rows (no per-span index maths or bounds checks), the
+    /// partial last spans through `span_as`; span by span where the kind's
+    /// pixel-major line loop does not pay ([`Pixel::PIXEL_MAJOR_LINE_LOOP`]).
+    fn resolve_as<O: Output>(&self, out: &mut [O], bg: Background) -> Result<(), FramebufferError> {
+        let b = O::background(bg);
+        let edge = |s, y| self.span_as::<O>(s, y, bg, b);
+        if !(L::SPANS || P::PIXEL_MAJOR_LINE_LOOP) {
+            return write_spans(self.dims, out, edge);
         }
-    }
-
-    fn resolve_into(&self, out: &mut [Vec4], bg: Background) -> Result<(), FramebufferError> {
-        let whole =
-            |line: &[Row], o: &mut [[Vec4; LANES]]| units::<P, _>(line, o, |u| P::resolve_unit::<L>(u).pixels(bg));
-        self.write(out, whole, |s, y| self.lanes(s, y).pixels(bg))
-    }
-
-    fn resolve_rgba8(&self, out: &mut [[u8; 4]], bg: Background) -> Result<(), FramebufferError> {
-        let ibg = int::background(bg);
-        let whole = |line: &[Row], o: &mut [[[u8; 4]; LANES]]| P::resolve_line_rgba8::<L>(line, o, ibg);
-        self.write(out, whole, |s, y| self.resolve_span_rgba8(s, y, bg))
-    }
-
-    fn resolve_rgba16f(&self, out: &mut [[f16; 4]], bg: Background) -> Result<(), FramebufferError> {
-        // Large stored spans convert through a call of their own: inlined into their
-        // whole-span loop, the 32 conversions ran 6-7 % more instructions (HT K = 4, MLAB
-        // M = 8 spans; smaller ones and pixel-major lose with the call; callgrind x86-64-v3).
-        let px = |r: ResolvedLanes| {
-            if L::SPANS && P::ROWS >= 5 {
-                rgba16f_lanes(&r, bg)
-            } else {
-                r.pixels(bg).map(to_rgba16f)
-            }
-        };
-        let whole = |line: &[Row], o: &mut [[[f16; 4]; LANES]]| units::<P, _>(line, o, |u| px(P::resolve_unit::<L>(u)));
-        self.write(out, whole, |s, y| px(self.lanes(s, y)))
+        let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
+        let whole = |line: &[Row], o: &mut [[O; LANES]]| O::line::<P, L>(line, o, b);
+        write_lines(self.dims, out, self.rows, line_rows, whole, edge)
     }
 
     fn as_rows(&self) -> &[Row] {
@@ -521,8 +354,12 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     }
 }
 
-/// The 8 pixels of a resolved span as RGBA16F, not inlined (see `Grid::resolve_rgba16f`).
-#[inline(never)]
-fn rgba16f_lanes(r: &ResolvedLanes, bg: Background) -> [[f16; 4]; LANES] {
-    r.pixels(bg).map(to_rgba16f)
+/// The kind's span insert on one unit of storage in the arrangement `L`.
+struct KindInsert<P, L>(PhantomData<(P, L)>);
+
+impl<P: Pixel, L: Arrangement> InsertUnit for KindInsert<P, L> {
+    #[inline(always)]
+    fn insert(&self, unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
+        P::insert_span::<L>(unit, rows, hashes, mask);
+    }
 }

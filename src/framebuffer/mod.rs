@@ -38,9 +38,13 @@
 //! # Ok::<(), mlab::Error>(())
 //! ```
 
+mod arrangement;
+mod dims;
 mod dynamic;
 mod grid;
+mod output;
 mod pixel;
+mod write;
 
 use glam::Vec4;
 use half::f16;
@@ -48,14 +52,19 @@ use half::f16;
 use crate::arith::{Arithmetic, Unbiased};
 use crate::fragment::Fragment;
 use crate::lanes::{FragmentLanes, InvalidLanes, LANES, ResolvedLanes};
-use crate::resolve::{Background, Resolved, to_rgba16f};
+use crate::resolve::{Background, Resolved};
 use crate::row::Row;
 
 pub use crate::error::FramebufferError;
 
-pub use dynamic::{DynFramebuffer, Layers};
-pub use grid::{Arrangement, Grid, PixelMajor, Spans};
+pub use arrangement::{Arrangement, PixelMajor, Spans};
+pub(crate) use dims::{Dims, SpanAt};
+pub use dynamic::{DynFramebuffer, DynPixel, Layers};
+pub use grid::Grid;
+pub use output::Output;
 pub use pixel::{Ht, Mlab, Pixel};
+
+use write::write_spans;
 
 /// MLAB, `M` rows per pixel, pixel-major.
 pub type MlabFramebuffer<'a, const M: usize, A = Unbiased> = Grid<'a, Mlab<M, A>, PixelMajor>;
@@ -65,168 +74,6 @@ pub type HybridFramebuffer<'a, const K: usize, A = Unbiased> = Grid<'a, Ht<K, A>
 pub type SpanFramebuffer<'a, const M: usize, A = Unbiased> = Grid<'a, Mlab<M, A>, Spans>;
 /// Hybrid Transparency, `K` head rows and a tail per pixel, in 8-pixel spans.
 pub type HybridSpanFramebuffer<'a, const K: usize, A = Unbiased> = Grid<'a, Ht<K, A>, Spans>;
-
-/// Width, height and spans per line, with the checks shared by every framebuffer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct Dims {
-    pub(crate) width: u32,
-    pub(crate) height: u32,
-    /// 8-pixel spans per line: `ceil(width / 8)`.
-    pub(crate) spans: usize,
-}
-
-impl Dims {
-    pub(crate) fn new(width: u32, height: u32) -> Dims {
-        Dims {
-            width,
-            height,
-            spans: (width as usize).div_ceil(LANES),
-        }
-    }
-
-    /// The error for pixel `(x, y)` outside these dimensions.
-    pub(crate) fn out_of_bounds(self, x: u32, y: u32) -> FramebufferError {
-        FramebufferError::OutOfBounds {
-            x,
-            y,
-            width: self.width,
-            height: self.height,
-        }
-    }
-
-    /// Check that pixel `(x, y)` is inside.
-    #[inline(always)]
-    pub(crate) fn check(self, x: u32, y: u32) -> Result<(), FramebufferError> {
-        if x >= self.width || y >= self.height {
-            return Err(self.out_of_bounds(x, y));
-        }
-        Ok(())
-    }
-
-    /// Pixel index of `(x, y)` (checked before).
-    #[inline(always)]
-    pub(crate) fn index_unchecked(self, x: u32, y: u32) -> usize {
-        y as usize * self.width as usize + x as usize
-    }
-
-    /// Stored span and lane of pixel `(x, y)` (checked before).
-    #[inline(always)]
-    pub(crate) fn span_lane(self, x: u32, y: u32) -> (usize, usize) {
-        (y as usize * self.spans + x as usize / LANES, x as usize % LANES)
-    }
-
-    /// Stored span index of span `span` of line `y`, if both are inside.
-    #[inline(always)]
-    pub(crate) fn span_index(self, span: u32, y: u32) -> Option<usize> {
-        ((span as usize) < self.spans && y < self.height).then(|| y as usize * self.spans + span as usize)
-    }
-
-    /// Pixels of a span from column `x` that lie inside the line.
-    #[inline(always)]
-    pub(crate) fn lanes_inside(self, x: u32) -> usize {
-        (self.width.saturating_sub(x) as usize).min(LANES)
-    }
-
-    /// Check a span operation at `(x, y)` with `mask`: every lane that is on lies inside (a
-    /// zero mask touches no pixel and may lie anywhere on a valid line).
-    #[inline(always)]
-    #[expect(clippy::cast_possible_truncation, reason = "clamped to u32::MAX first")]
-    pub(crate) fn check_span(self, x: u32, y: u32, mask: u8) -> Result<(), FramebufferError> {
-        if y >= self.height {
-            return Err(self.out_of_bounds(x, y));
-        }
-        if mask == 0 {
-            return Ok(());
-        }
-        let last = x as u64 + 7 - mask.leading_zeros() as u64;
-        if last >= self.width as u64 {
-            return Err(self.out_of_bounds(last.min(u32::MAX as u64) as u32, y));
-        }
-        Ok(())
-    }
-
-    /// Check an output slice length: exactly `width * height` pixels.
-    pub(crate) fn check_output(self, len: usize) -> Result<(), FramebufferError> {
-        let expected = (self.width as usize)
-            .checked_mul(self.height as usize)
-            .ok_or(FramebufferError::SizeOverflow)?;
-        if len != expected {
-            return Err(FramebufferError::OutputLength { expected, actual: len });
-        }
-        Ok(())
-    }
-}
-
-/// Write the 8 lanes of each span (`span(span_index_in_line, y)`) into a row-major output
-/// of `width * height` pixels, dropping lanes past the right edge. Whole spans are written as
-/// arrays, a fixed-size store each (a copy of `o.len()` elements, the same for every chunk,
-/// compiled to a call to `memmove` per span: 16-22 % of an RGBA8 resolve at M = 1).
-#[expect(
-    clippy::cast_possible_truncation,
-    reason = "span and line indices are below the u32 width and height"
-)]
-pub(crate) fn write_spans<T: Copy>(
-    d: Dims,
-    out: &mut [T],
-    span: impl Fn(u32, u32) -> [T; LANES],
-) -> Result<(), FramebufferError> {
-    d.check_output(out.len())?;
-    if d.width == 0 {
-        return Ok(());
-    }
-    for (y, line) in out.chunks_exact_mut(d.width as usize).enumerate() {
-        let (whole, rest) = line.as_chunks_mut::<LANES>();
-        for (sx, o) in whole.iter_mut().enumerate() {
-            *o = span(sx as u32, y as u32);
-        }
-        if !rest.is_empty() {
-            write_edge(rest, &span, whole.len() as u32, y as u32);
-        }
-    }
-    Ok(())
-}
-
-/// [`write_spans`] with the whole spans of each line written by `whole` from the line's
-/// `line_rows` rows of `rows` (a framebuffer's own loop, without index maths or a bounds
-/// check per span). Two writers, not one taking a closure per line: written as one, the
-/// resolves ran 2 to 10 % more instructions (callgrind, `docs/performance.md`).
-#[expect(
-    clippy::cast_possible_truncation,
-    reason = "span and line indices are below the u32 width and height"
-)]
-pub(crate) fn write_lines<T: Copy>(
-    d: Dims,
-    out: &mut [T],
-    rows: &[Row],
-    line_rows: usize,
-    whole: impl Fn(&[Row], &mut [[T; LANES]]),
-    edge: impl Fn(u32, u32) -> [T; LANES],
-) -> Result<(), FramebufferError> {
-    d.check_output(out.len())?;
-    if d.width == 0 {
-        return Ok(());
-    }
-    let lines = out
-        .chunks_exact_mut(d.width as usize)
-        .zip(rows.chunks_exact(line_rows.max(1)));
-    for (y, (line, src)) in lines.enumerate() {
-        let (spans, rest) = line.as_chunks_mut::<LANES>();
-        whole(src, spans);
-        if !rest.is_empty() {
-            write_edge(rest, &edge, spans.len() as u32, y as u32);
-        }
-    }
-    Ok(())
-}
-
-/// The partial last span of a line (`rest`: its 1 to 7 pixels inside), by `edge(span, y)`:
-/// a call of its own, once per line where the width is not a multiple of 8, so that the
-/// loops over whole spans hold only their code.
-#[inline(never)]
-fn write_edge<T: Copy>(rest: &mut [T], edge: &impl Fn(u32, u32) -> [T; LANES], span: u32, y: u32) {
-    let px = edge(span, y);
-    rest.copy_from_slice(px.get(..rest.len()).unwrap_or(&px));
-}
 
 /// Resolved lanes of nothing (lanes past the edge, or spans that cannot exist).
 pub(crate) const CLEAR_LANES: ResolvedLanes = ResolvedLanes {
@@ -363,6 +210,23 @@ pub trait Framebuffer {
         self.insert_span(x, y, rows, mask)
     }
 
+    /// [`insert_span_hashed`](Self::insert_span_hashed) at an aligned span found (and
+    /// checked) before, without a second check: the [`SpanBatcher`](crate::SpanBatcher)'s
+    /// flush. Crate-private in effect (no other crate can name a `SpanAt`); this default is
+    /// [`insert_span_hashed`](Self::insert_span_hashed) at its coordinates.
+    #[doc(hidden)]
+    #[inline(always)]
+    #[allow(private_interfaces)]
+    fn insert_span_at(
+        &mut self,
+        at: SpanAt,
+        rows: &[Row; LANES],
+        hashes: &[u32; LANES],
+        mask: u8,
+    ) -> Result<(), FramebufferError> {
+        self.insert_span_hashed(at.x, at.y, rows, hashes, mask)
+    }
+
     /// Insert a fragment at `(x, y)`, quantized by [`Self::Arith`](Arithmetic::quantize)
     /// with its hash in this pixel ([`Fragment::hash`] of [`pixel_id`](Self::pixel_id)).
     #[inline(always)]
@@ -395,29 +259,47 @@ pub trait Framebuffer {
         self.resolve_span(span, y).unwrap_or(CLEAR_LANES).rgba8(background)
     }
 
-    /// Resolve every pixel into f32 RGBA, row-major (`width * height`): opaque over a
-    /// background, or premultiplied ([`Resolved::pixel`]). Linear.
-    fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
-        let span = |s, y| self.resolve_span(s, y).unwrap_or(CLEAR_LANES).pixels(background);
+    /// Resolve every pixel into the format `O` ([`Output`]: f32 [`Vec4`], RGBA8 `[u8; 4]`
+    /// (the integer resolve), RGBA16F `[f16; 4]`), row-major (`width * height`), linear.
+    /// [`resolve_into`](Self::resolve_into), [`resolve_rgba8`](Self::resolve_rgba8) and
+    /// [`resolve_rgba16f`](Self::resolve_rgba16f) are this for their formats. This default,
+    /// for a framebuffer of another crate, resolves span by span through
+    /// [`resolve_span`](Self::resolve_span) (RGBA8: [`resolve_span_rgba8`](Self::resolve_span_rgba8)).
+    ///
+    /// ```
+    /// use mlab::glam::Vec3;
+    /// use mlab::{Background, Framebuffer, MlabFramebuffer, Row};
+    /// let mut storage = vec![Row::EMPTY; 2 * 1 * 4];
+    /// let mut fb = MlabFramebuffer::<4>::new_cleared(&mut storage, 2, 1)?;
+    /// fb.insert_row(0, 0, Row::new([0, 255, 0], 0, 1.0))?;
+    /// let mut out = [[0u8; 4]; 2];
+    /// fb.resolve_as(&mut out, Background::Opaque(Vec3::ONE))?;
+    /// assert_eq!(out, [[0, 255, 0, 255], [255, 255, 255, 255]]);
+    /// # Ok::<(), mlab::Error>(())
+    /// ```
+    fn resolve_as<O: Output>(&self, out: &mut [O], background: Background) -> Result<(), FramebufferError> {
+        let span = |s, y| O::span(self, s, y, background);
         write_spans(Dims::new(self.width(), self.height()), out, span)
+    }
+
+    /// Resolve every pixel into f32 RGBA, row-major (`width * height`): opaque over a
+    /// background, or premultiplied ([`Resolved::pixel`]). Linear. [`resolve_as`](Self::resolve_as)
+    /// into [`Vec4`].
+    fn resolve_into(&self, out: &mut [Vec4], background: Background) -> Result<(), FramebufferError> {
+        self.resolve_as(out, background)
     }
 
     /// Resolve every pixel into RGBA8 (linear unorm8, not sRGB), row-major: the integer
-    /// resolve (see the trait docs); the same bytes as [`resolve_span_rgba8`](Self::resolve_span_rgba8) span by span.
+    /// resolve (see the trait docs); the same bytes as [`resolve_span_rgba8`](Self::resolve_span_rgba8)
+    /// span by span. [`resolve_as`](Self::resolve_as) into `[u8; 4]`.
     fn resolve_rgba8(&self, out: &mut [[u8; 4]], background: Background) -> Result<(), FramebufferError> {
-        let span = |s, y| self.resolve_span_rgba8(s, y, background);
-        write_spans(Dims::new(self.width(), self.height()), out, span)
+        self.resolve_as(out, background)
     }
 
-    /// Resolve every pixel into RGBA16F ([`to_rgba16f`], linear), row-major.
+    /// Resolve every pixel into RGBA16F ([`to_rgba16f`](crate::to_rgba16f), linear),
+    /// row-major. [`resolve_as`](Self::resolve_as) into `[f16; 4]`.
     fn resolve_rgba16f(&self, out: &mut [[f16; 4]], background: Background) -> Result<(), FramebufferError> {
-        let span = |s, y| {
-            self.resolve_span(s, y)
-                .unwrap_or(CLEAR_LANES)
-                .pixels(background)
-                .map(to_rgba16f)
-        };
-        write_spans(Dims::new(self.width(), self.height()), out, span)
+        self.resolve_as(out, background)
     }
 
     /// Split into bands of `lines` lines (the last one may be shorter), each a framebuffer

@@ -1,17 +1,18 @@
 //! What a pixel holds: [`Mlab`] (`M` rows) or [`Ht`] (`K` head rows and a tail), each in an
 //! arithmetic. The only code of the storage layer that names `M`, `K` or the tail type: every
-//! per-kind fast path is a leaf here, called by the two arrangements
-//! ([`PixelMajor`](super::PixelMajor), [`Spans`](super::Spans)) with the rows of one unit of
-//! storage:
-//!
-//! - pixel-major leaves (`pm_*`) get one pixel's rows, or the rows of 1 to 8 consecutive
-//!   pixels of a line (a span; fewer than 8 at the right edge);
-//! - span leaves (`span_*`) get one stored 8-pixel span, layer-major (`8 * ROWS` rows).
+//! per-kind leaf is here, over layer-major spans (`M` layers; `K` head layers and the tails)
+//! or one pixel's rows that the arrangement ([`PixelMajor`](super::PixelMajor),
+//! [`Spans`](super::Spans)) hands it, borrowed or gathered: no leaf asks which arrangement
+//! it runs on. The measured pixel-major cells are named as such: MLAB's resolve of 8 whole
+//! pixel-major pixels without the transpose, MLAB's one-lane insert with AVX, HT's
+//! [`PIXEL_MAJOR_LINE_LOOP`](Pixel::PIXEL_MAJOR_LINE_LOOP) and span-insert facts.
 
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::{Arrangement, CLEAR_LANES, Layers};
+use super::arrangement::{Arrangement, Layers8, PixelLeaf, SpanLeaf, lane_rows, set_lane_rows};
+use super::dims::Dims;
+use super::{CLEAR_LANES, Layers};
 use crate::arith::{Arithmetic, Unbiased};
 use crate::hybrid::{self, TailFormat};
 use crate::lanes::{self, LANES, ResolvedLanes};
@@ -36,6 +37,8 @@ pub struct Ht<const K: usize, A: Arithmetic = Unbiased>(PhantomData<A>);
 
 /// What one pixel of a [`Grid`](super::Grid) holds: [`Mlab`] or [`Ht`] (sealed). The
 /// hidden items are the storage layer's leaves.
+// `Dims` is the crate's own: the trait is sealed, no other crate implements or calls it.
+#[allow(private_interfaces)]
 pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// The arithmetic of the merge, of quantization and of the tail.
     type Arith: Arithmetic;
@@ -54,8 +57,8 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// inserts of quantized rows do not.
     #[doc(hidden)]
     const MERGES: bool;
-    /// Whether the pixel-major RGBA8 resolve walks whole spans in the line loop (see the
-    /// HT implementation for where it does not).
+    /// Whether the pixel-major resolves walk whole spans in the line loop (see the HT
+    /// implementation for where they do not).
     #[doc(hidden)]
     const PIXEL_MAJOR_LINE_LOOP: bool = true;
 
@@ -73,120 +76,107 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// Slot `j` of an empty pixel.
     #[doc(hidden)]
     fn empty_slot(j: usize) -> Row;
-    /// Listing 1 or 2 on one pixel-major pixel (`px`: its `ROWS` slots).
+    /// Listing 1 or 2 on pixel `(x, y)` (checked before) of `rows` in the arrangement `L`.
     #[doc(hidden)]
-    fn pm_insert(px: &mut [Row], row: Row, h: u32);
-    /// Listing 1 or 2 on lane `lane` of a stored span (`8 * ROWS` rows, layer-major).
-    #[doc(hidden)]
-    fn span_insert(span: &mut [Row], lane: usize, row: Row, h: u32);
+    fn insert_pixel<L: Arrangement>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32);
     /// A span insert, for the lanes set in `mask`, into the storage `unit` of one span in the
     /// arrangement `L`: a stored span, or 1 to 8 consecutive pixel-major pixels (the lanes
     /// past them are off).
     #[doc(hidden)]
-    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8);
-    /// The f32 resolve of the storage of one span (as for `insert_unit`), lanes past its
+    fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8);
+    /// The f32 resolve of the storage of one span (as for `insert_span`), lanes past its
     /// pixels clear.
     #[doc(hidden)]
-    fn resolve_unit<L: Arrangement>(unit: &[Row]) -> ResolvedLanes;
-    /// The RGBA8 resolve of the storage of one span, as this kind writes RGBA8.
+    fn resolve_f32<L: Arrangement>(unit: &[Row]) -> ResolvedLanes;
+    /// The integer (RGBA8) resolve of the storage of one span.
     #[doc(hidden)]
-    fn resolve_unit_rgba8<L: Arrangement>(unit: &[Row], background: IntBackground) -> [[u8; 4]; LANES];
-    /// [`resolve_unit_rgba8`](Self::resolve_unit_rgba8) of the whole spans of one line
-    /// (`line`: the line's rows), into `out`.
+    fn resolve_int<L: Arrangement>(unit: &[Row], background: IntBackground) -> [[u8; 4]; LANES];
+    /// [`resolve_int`](Self::resolve_int) of the whole spans of one line (`line`: the line's
+    /// rows), into `out`.
     #[doc(hidden)]
     #[inline(always)]
-    fn resolve_line_rgba8<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: IntBackground) {
+    fn resolve_line_int<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: IntBackground) {
         for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * Self::ROWS)) {
-            *o = Self::resolve_unit_rgba8::<L>(u, background);
+            *o = Self::resolve_int::<L>(u, background);
         }
     }
-    /// The RGBA8 of 8 empty pixels (a span that does not exist), as this kind's RGBA8
-    /// resolve writes an empty pixel.
+    /// The integer resolve of 8 empty pixels (a span that does not exist), as this kind's
+    /// integer resolve writes an empty pixel: for a background that is not a byte value it
+    /// may differ from [`crate::to_rgba8`] of it by one step.
     #[doc(hidden)]
-    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES];
+    fn clear_int(background: Background) -> [[u8; 4]; LANES];
 }
 
-/// Gather rows `offset..offset + N` of each pixel of `px` (`stride` rows per pixel, at most
-/// 8 pixels) into a layer-major span; lanes past the pixels hold `fill`.
-#[inline(always)]
-fn gather<const N: usize>(px: &[Row], stride: usize, offset: usize, fill: Row) -> [[Row; LANES]; N] {
-    let mut span = [[fill; LANES]; N];
-    for (lane, p) in px.chunks_exact(stride).take(LANES).enumerate() {
-        if let Some(p) = p.get(offset..offset + N) {
-            for (layer, row) in span.iter_mut().zip(p) {
-                layer[lane] = *row;
-            }
-        }
-    }
-    span
-}
+/// MLAB's insert of one row: Listing 1 on one pixel's rows, or on its lane of a stored span.
+#[derive(Clone, Copy)]
+struct MlabRow<A, const M: usize>(Row, u32, PhantomData<A>);
 
-/// The inverse of [`gather`] for the lanes set in `mask`.
-#[inline(always)]
-fn scatter<const N: usize>(px: &mut [Row], stride: usize, offset: usize, mask: u8, span: &[[Row; LANES]; N]) {
-    for (lane, p) in px.chunks_exact_mut(stride).take(LANES).enumerate() {
-        if mask & (1 << lane) == 0 {
-            continue;
-        }
-        if let Some(p) = p.get_mut(offset..offset + N) {
-            for (layer, row) in span.iter().zip(p) {
-                *row = layer[lane];
-            }
-        }
-    }
-}
-
-/// The rows of one lane of `N` layers (one pixel of a span), gathered into an array, for a
-/// pixel insert in scalar code on span storage ([`set_lane_rows`] writes them back). Two functions,
-/// not one taking a closure: a closure is a call where the caller is large
-/// (`DynFramebuffer`'s match over every size).
-#[inline(always)]
-fn lane_rows<const N: usize>(layers: &[[Row; LANES]; N], lane: usize) -> [Row; N] {
-    core::array::from_fn(|j| layers[j].get(lane).copied().unwrap_or(Row::EMPTY))
-}
-
-/// Write back what [`lane_rows`] read.
-#[inline(always)]
-fn set_lane_rows<const N: usize>(layers: &mut [[Row; LANES]; N], lane: usize, px: [Row; N]) {
-    for (layer, r) in layers.iter_mut().zip(px) {
-        if let Some(slot) = layer.get_mut(lane) {
-            *slot = r;
-        }
-    }
-}
-
-/// `rows` as `N` layers of 8 rows (a stored span's layers), when it holds exactly that.
-#[inline(always)]
-fn layers<const N: usize>(rows: &[Row]) -> Option<&[[Row; LANES]; N]> {
-    rows.as_chunks::<LANES>().0.try_into().ok()
-}
-
-/// [`layers`], mutable.
-#[inline(always)]
-fn layers_mut<const N: usize>(rows: &mut [Row]) -> Option<&mut [[Row; LANES]; N]> {
-    rows.as_chunks_mut::<LANES>().0.try_into().ok()
-}
-
-impl<const M: usize, A: Arithmetic> Mlab<M, A> {
-    /// `span(layers)` of the storage of one span in the arrangement `L` (pixel-major pixels
-    /// gathered into layers, empty rows past them), or `whole(pixels)` of 8 whole
-    /// pixel-major pixels, which a resolve reads without the transpose.
+impl<A: Arithmetic, const M: usize> PixelLeaf<M, 0> for MlabRow<A, M> {
     #[inline(always)]
-    fn view<L: Arrangement, R>(
-        unit: &[Row],
-        span: impl FnOnce(&[[Row; LANES]; M]) -> R,
-        whole: impl FnOnce(&[[Row; M]; LANES]) -> R,
-    ) -> Option<R> {
-        if L::SPANS {
-            return layers::<M>(unit).map(span);
-        }
-        Some(match unit.as_chunks::<M>().0.try_into() {
-            Ok(px) => whole(px),
-            Err(_) => span(&gather::<M>(unit, M, 0, Row::EMPTY)),
-        })
+    fn pixel(self, px: &mut [Row; M], _: &mut [Row; 0]) {
+        mlab::insert_hashed::<A, M>(px, self.0, self.1);
+    }
+
+    /// MLAB's one-lane cell (see [`MLAB_LANE_INSERT_PAYS`]).
+    #[inline(always)]
+    fn lane(self, span: &mut Layers8<M>, _: &mut Layers8<0>, lane: usize) {
+        lanes::mlab_insert_hashed::<A, M>(span, &[self.0; LANES], &[self.1; LANES], 1 << (lane % LANES));
     }
 }
 
+/// MLAB's span insert: Listing 1 in lanes, for the lanes set in the mask.
+struct MlabSpan<'r, A, const M: usize>(&'r [Row; LANES], &'r [u32; LANES], u8, PhantomData<A>);
+
+impl<A: Arithmetic, const M: usize> SpanLeaf<M, 0> for MlabSpan<'_, A, M> {
+    #[inline(always)]
+    fn span(self, span: &mut Layers8<M>, _: &mut Layers8<0>) {
+        lanes::mlab_insert_hashed::<A, M>(span, self.0, self.1, self.2);
+    }
+}
+
+/// HT's insert of one row: Listing 2 in scalar code on one pixel's head rows and tail slot,
+/// or on its lane of a stored span, its head rows gathered and the tail in place (one pixel
+/// does not pay for eight lanes, `docs/performance.md`; the tail gathered as well: 1.035x
+/// the instructions).
+#[derive(Clone, Copy)]
+struct HtRow<A, const K: usize>(Row, PhantomData<A>);
+
+impl<A: Arithmetic, const K: usize> PixelLeaf<K, 1> for HtRow<A, K> {
+    #[inline(always)]
+    fn pixel(self, head: &mut [Row; K], [t]: &mut [Row; 1]) {
+        let mut tail = A::Tail::from_bytes(t.to_bytes());
+        hybrid::insert(head, &mut tail, self.0);
+        *t = Row::from_bytes(tail.to_bytes());
+    }
+
+    #[inline(always)]
+    fn lane(self, head: &mut Layers8<K>, [tails]: &mut Layers8<1>, lane: usize) {
+        let tails = bytemuck::cast_mut::<_, [A::Tail; LANES]>(tails);
+        if let Some(tail) = tails.get_mut(lane) {
+            let mut px = lane_rows(head, lane);
+            hybrid::insert(&mut px, tail, self.0);
+            set_lane_rows(head, lane, px);
+        }
+    }
+}
+
+/// HT's span insert: Listing 2 in lanes on the head layers and tails, for the lanes set in
+/// the mask.
+struct HtSpan<'r, A, const K: usize>(&'r [Row; LANES], u8, PhantomData<A>);
+
+impl<A: Arithmetic, const K: usize> SpanLeaf<K, 1> for HtSpan<'_, A, K> {
+    #[inline(always)]
+    fn span(self, head: &mut Layers8<K>, [tails]: &mut Layers8<1>) {
+        lanes::hybrid_insert_parts(head, bytemuck::cast_mut::<_, [A::Tail; LANES]>(tails), self.0, self.1);
+    }
+}
+
+/// MLAB's measured cell for a pixel insert into span storage: with AVX, a span insert of one
+/// lane; without, the pixel's rows gathered, Listing 1 in scalar code, written back (the
+/// faster of the two on each, `docs/performance.md`). The same rows either way.
+const MLAB_LANE_INSERT_PAYS: bool = cfg!(target_feature = "avx");
+
+#[allow(private_interfaces)]
 impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     type Arith = A;
     type Value = [Row; M];
@@ -218,76 +208,52 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
         Row::EMPTY
     }
 
-    #[inline(always)]
-    fn pm_insert(px: &mut [Row], row: Row, h: u32) {
-        if let Some(p) = px.first_chunk_mut::<M>() {
-            mlab::insert_hashed::<A, M>(p, row, h);
-        }
-    }
-
-    /// With AVX, a span insert of one lane; without, the pixel's rows gathered, Listing 1 in
-    /// scalar code, scattered back (the faster of the two on each, `docs/performance.md`).
-    /// The same rows either way.
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
-    fn span_insert(span: &mut [Row], lane: usize, row: Row, h: u32) {
-        if let Some(l) = layers_mut::<M>(span) {
-            if cfg!(target_feature = "avx") {
-                lanes::mlab_insert_hashed::<A, M>(l, &[row; LANES], &[h; LANES], 1 << (lane % LANES));
-            } else {
-                let mut px = lane_rows(l, lane);
-                mlab::insert_hashed::<A, M>(&mut px, row, h);
-                set_lane_rows(l, lane, px);
-            }
-        }
-    }
-
-    /// Pixel-major: the pixels gathered into a layer-major span, inserted in lanes, the
-    /// lanes that are on scattered back.
-    #[inline(always)]
-    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
-        if !L::SPANS {
-            let mut span = gather::<M>(unit, M, 0, Row::EMPTY);
-            lanes::mlab_insert_hashed::<A, M>(&mut span, rows, hashes, mask);
-            scatter::<M>(unit, M, 0, mask, &span);
-        } else if let Some(l) = layers_mut::<M>(unit) {
-            lanes::mlab_insert_hashed::<A, M>(l, rows, hashes, mask);
-        }
+    fn insert_pixel<L: Arrangement>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, h: u32) {
+        let leaf = MlabRow::<A, M>(row, h, PhantomData);
+        L::pixel_mut::<M, 0>(rows, d, x, y, MLAB_LANE_INSERT_PAYS, leaf);
     }
 
     #[inline(always)]
-    fn resolve_unit<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
-        // Not through `view`: through it, MLAB M = 8 spans ran 1.17x the instructions (callgrind,
-        // x86-64-v3; the same at M <= 4).
-        if L::SPANS {
-            return layers::<M>(unit).map_or(CLEAR_LANES, lanes::mlab_resolve);
-        }
-        match unit.as_chunks::<M>().0.try_into() {
-            Ok(px) => lanes::mlab_resolve_pixel_major(px),
-            Err(_) => lanes::mlab_resolve(&gather::<M>(unit, M, 0, Row::EMPTY)),
-        }
+    fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
+        L::layers_mut::<M, 0>(
+            unit,
+            Row::EMPTY,
+            mask,
+            MlabSpan::<A, M>(rows, hashes, mask, PhantomData),
+        );
     }
 
+    /// 8 whole pixel-major pixels: MLAB's pixel-major cell, without the transpose.
     #[inline(always)]
-    fn resolve_unit_rgba8<L: Arrangement>(unit: &[Row], bg: IntBackground) -> [[u8; 4]; LANES] {
-        let span = |l: &[[Row; LANES]; M]| lanes::mlab_resolve_rgba8(l, bg);
+    fn resolve_f32<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
+        L::layers_or_pixels::<M, _>(unit, lanes::mlab_resolve, lanes::mlab_resolve_pixel_major, || {
+            CLEAR_LANES
+        })
+    }
+
+    /// 8 whole pixel-major pixels: MLAB's pixel-major cell, without the transpose.
+    #[inline(always)]
+    fn resolve_int<L: Arrangement>(unit: &[Row], bg: IntBackground) -> [[u8; 4]; LANES] {
+        let span = |l: &Layers8<M>| lanes::mlab_resolve_rgba8(l, bg);
         let whole = |px: &[[Row; M]; LANES]| lanes::mlab_resolve_pixel_major_rgba8(px, bg);
-        Self::view::<L, _>(unit, span, whole).unwrap_or_else(|| span(&[[Row::EMPTY; LANES]; M]))
+        L::layers_or_pixels::<M, _>(unit, span, whole, || span(&[[Row::EMPTY; LANES]; M]))
     }
 
+    /// The pixel-major line: MLAB's pixel-major cell, the pixels cast to `[[Row; M]; 8]` once
+    /// per line.
     #[inline(always)]
-    fn resolve_line_rgba8<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: IntBackground) {
-        if L::SPANS {
-            lanes::mlab_resolve_line_rgba8(line.as_chunks::<LANES>().0.as_chunks::<M>().0, out, bg);
-        } else {
-            lanes::mlab_resolve_pixel_major_line_rgba8(line.as_chunks::<M>().0.as_chunks::<LANES>().0, out, bg);
-        }
+    fn resolve_line_int<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: IntBackground) {
+        L::lines::<M, _>(
+            line,
+            out,
+            |spans, out| lanes::mlab_resolve_line_rgba8(spans, out, bg),
+            |pixels, out| lanes::mlab_resolve_pixel_major_line_rgba8(pixels, out, bg),
+        );
     }
 
-    /// The integer resolve of an empty pixel (`resolve::int`), which for a background that
-    /// is not a byte value may differ from [`crate::to_rgba8`] of it by one step.
-    /// An empty pixel's integer resolve (its `M` empty rows: a span outside writes what an
-    /// empty pixel does).
-    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
+    /// An empty pixel's integer resolve (its `M` empty rows).
+    fn clear_int(background: Background) -> [[u8; 4]; LANES] {
         [crate::resolve::int::rgba8(&[Row::EMPTY; M], background); LANES]
     }
 }
@@ -296,11 +262,6 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
 /// chains), two without (SSE2: two 128-bit chains; four spilled, 1.14x the time).
 const HT_RESOLVE_GROUP: usize = if cfg!(target_feature = "avx2") { 4 } else { 2 };
 
-/// Head layers and tails of a stored HT span.
-type HtSpan<'s, const K: usize, T> = (&'s [[Row; LANES]; K], &'s [T; LANES]);
-/// Head layers and tails of a stored HT span, mutable.
-type HtSpanMut<'s, const K: usize, T> = (&'s mut [[Row; LANES]; K], &'s mut [T; LANES]);
-
 impl<const K: usize, A: Arithmetic> Ht<K, A> {
     /// The bytes of an empty tail in a row-sized slot.
     #[inline(always)]
@@ -308,69 +269,78 @@ impl<const K: usize, A: Arithmetic> Ht<K, A> {
         Row::from_bytes(A::Tail::EMPTY.to_bytes())
     }
 
-    /// Head layers and tails of the 1 to 8 pixels of `px` (`K + 1` slots each); lanes past
-    /// them hold empty rows and empty tails.
-    #[inline(always)]
-    fn gather(px: &[Row]) -> ([[Row; LANES]; K], [A::Tail; LANES]) {
-        // A whole span (the common case): a transpose with constant indices, no fill first
-        // (`get` cannot fail there; it keeps the code free of panics).
-        if let Some(px) = px.get(..LANES * (K + 1)) {
-            let at = |lane: usize, slot: usize| px.get(lane * (K + 1) + slot).copied().unwrap_or(Self::empty_tail());
-            let head = core::array::from_fn(|layer| core::array::from_fn(|lane| at(lane, layer)));
-            let tails: [Row; LANES] = core::array::from_fn(|lane| at(lane, K));
-            return (head, bytemuck::cast(tails));
-        }
-        let mut head = [[Row::EMPTY; LANES]; K];
-        let mut tails = [Self::empty_tail(); LANES];
-        // One pass over the pixels' slots (contiguous): head rows, then the tail slot.
-        for (lane, p) in px.chunks_exact(K + 1).take(LANES).enumerate() {
-            if let (Some((t, h)), Some(tail)) = (p.split_last(), tails.get_mut(lane)) {
-                for (layer, row) in head.iter_mut().zip(h) {
-                    layer[lane] = *row;
-                }
-                *tail = *t;
-            }
-        }
-        (head, bytemuck::cast(tails))
-    }
-
     /// `f(head, tails)` of the storage of one span in the arrangement `L` (pixel-major pixels
     /// gathered, empty rows and tails past them).
     #[inline(always)]
-    fn view<L: Arrangement, R>(unit: &[Row], f: impl FnOnce(&[[Row; LANES]; K], &[A::Tail; LANES]) -> R) -> Option<R> {
-        if L::SPANS {
-            return Self::parts(unit).map(|(h, t)| f(h, t));
-        }
-        let (head, tails) = Self::gather(unit);
-        Some(f(&head, &tails))
+    fn view<L: Arrangement, R>(unit: &[Row], f: impl FnOnce(&Layers8<K>, &[A::Tail; LANES]) -> R) -> Option<R> {
+        L::layers::<K, 1, _>(
+            unit,
+            Self::empty_tail(),
+            |h, [t]| Some(f(h, bytemuck::cast_ref(t))),
+            || None,
+        )
+    }
+
+    /// [`view`](Self::view), `or()` where the unit is not a span.
+    #[inline(always)]
+    fn view_or<L: Arrangement, R>(
+        unit: &[Row],
+        f: impl FnOnce(&Layers8<K>, &[A::Tail; LANES]) -> R,
+        or: impl FnOnce() -> R,
+    ) -> R {
+        L::layers::<K, 1, _>(unit, Self::empty_tail(), |h, [t]| f(h, bytemuck::cast_ref(t)), or)
     }
 
     /// Whether every tail slot of the storage of one span in the arrangement `L` is empty
     /// (all bits zero; slots past the storage count as empty).
     #[inline(always)]
     fn tails_empty<L: Arrangement>(unit: &[Row]) -> bool {
-        let slot = |lane: usize| if L::SPANS { K * LANES + lane } else { lane * (K + 1) + K };
-        let word = |lane: usize| unit.get(slot(lane)).map_or(0, |r| bytemuck::cast::<Row, u64>(*r));
+        let word = |lane: usize| {
+            unit.get(L::unit_slot(K + 1, lane, K))
+                .map_or(0, |r| bytemuck::cast::<Row, u64>(*r))
+        };
         (0..LANES).fold(0, |a, lane| a | word(lane)) == 0
     }
 
-    /// Head layers and tails of a stored span.
+    /// The integer resolve of the spans `i0`, `i1` of a line (`at(i)`: the unit of span `i`),
+    /// their tails' dependency chains overlapped.
     #[inline(always)]
-    fn parts(span: &[Row]) -> Option<HtSpan<'_, K, A::Tail>> {
-        let (head, tails) = span.split_at_checked(K * LANES)?;
-        let tails: &[Row; LANES] = tails.try_into().ok()?;
-        Some((layers::<K>(head)?, bytemuck::cast_ref(tails)))
+    fn resolve_pair<'l, L: Arrangement>(
+        at: impl Fn(usize) -> &'l [Row],
+        [i0, i1]: [usize; 2],
+        bg: IntBackground,
+    ) -> Option<[[[u8; 4]; LANES]; 2]> {
+        Self::view::<L, _>(at(i0), |h0, t0| {
+            Self::view::<L, _>(at(i1), |h1, t1| {
+                lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg)
+            })
+        })
+        .flatten()
     }
 
-    /// [`parts`](Self::parts), mutable.
+    /// [`resolve_pair`](Self::resolve_pair) of four spans.
     #[inline(always)]
-    fn parts_mut(span: &mut [Row]) -> Option<HtSpanMut<'_, K, A::Tail>> {
-        let (head, tails) = span.split_at_mut_checked(K * LANES)?;
-        let tails: &mut [Row; LANES] = tails.try_into().ok()?;
-        Some((layers_mut::<K>(head)?, bytemuck::cast_mut(tails)))
+    fn resolve_four<'l, L: Arrangement>(
+        at: impl Fn(usize) -> &'l [Row],
+        [i0, i1, i2, i3]: [usize; 4],
+        bg: IntBackground,
+    ) -> Option<[[[u8; 4]; LANES]; 4]> {
+        Self::view::<L, _>(at(i0), |h0, t0| {
+            Self::view::<L, _>(at(i1), |h1, t1| {
+                Self::view::<L, _>(at(i2), |h2, t2| {
+                    Self::view::<L, _>(at(i3), |h3, t3| {
+                        lanes::hybrid_resolve_parts4_rgba8([(h0, t0), (h1, t1), (h2, t2), (h3, t3)], bg)
+                    })
+                })
+            })
+        })
+        .flatten()
+        .flatten()
+        .flatten()
     }
 }
 
+#[allow(private_interfaces)]
 impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     type Arith = A;
     type Value = ([Row; K], A::Tail);
@@ -403,81 +373,44 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         if j < K { Row::EMPTY } else { Self::empty_tail() }
     }
 
-    #[inline(always)]
-    fn pm_insert(px: &mut [Row], row: Row, _: u32) {
-        if let Some((t, h)) = px.split_last_mut()
-            && let Ok(head) = <&mut [Row; K]>::try_from(h)
-        {
-            let mut tail = A::Tail::from_bytes(t.to_bytes());
-            hybrid::insert(head, &mut tail, row);
-            *t = Row::from_bytes(tail.to_bytes());
-        }
-    }
-
-    /// The pixel's head rows and tail gathered, Listing 2 in scalar code, scattered back:
-    /// one pixel does not pay for eight lanes (`docs/performance.md`).
+    /// The pixel's head rows and tail (gathered from their lane in span storage), Listing 2
+    /// in scalar code: one pixel does not pay for eight lanes (`docs/performance.md`).
     #[inline(always)] // also in each arm of DynFramebuffer's match (a call there: 1.2x)
-    fn span_insert(span: &mut [Row], lane: usize, row: Row, _: u32) {
-        if let Some((head, tails)) = Self::parts_mut(span)
-            && let Some(tail) = tails.get_mut(lane)
-        {
-            let mut px = lane_rows(head, lane);
-            hybrid::insert(&mut px, tail, row);
-            set_lane_rows(head, lane, px);
-        }
-    }
-
-    /// Pixel-major: the pixels' heads and tails gathered, inserted in lanes, the lanes that
-    /// are on scattered back.
-    #[inline(always)]
-    fn insert_unit<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], _: &[u32; LANES], mask: u8) {
-        if L::SPANS {
-            if let Some((head, tails)) = Self::parts_mut(unit) {
-                lanes::hybrid_insert_parts(head, tails, rows, mask);
-            }
-            return;
-        }
-        let (mut head, mut tails) = Self::gather(unit);
-        lanes::hybrid_insert_parts(&mut head, &mut tails, rows, mask);
-        scatter::<K>(unit, K + 1, 0, mask, &head);
-        let tails: [Row; LANES] = bytemuck::cast(tails);
-        scatter::<1>(unit, K + 1, K, mask, &[tails]);
+    fn insert_pixel<L: Arrangement>(rows: &mut [Row], d: Dims, x: u32, y: u32, row: Row, _: u32) {
+        L::pixel_mut::<K, 1>(rows, d, x, y, true, HtRow::<A, K>(row, PhantomData));
     }
 
     #[inline(always)]
-    fn resolve_unit<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
-        if L::SPANS {
-            return Self::parts(unit).map_or(CLEAR_LANES, |(h, t)| lanes::hybrid_resolve_parts(h, t));
-        }
-        let (head, tails) = Self::gather(unit);
-        lanes::hybrid_resolve_parts(&head, &tails)
+    fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], _: &[u32; LANES], mask: u8) {
+        L::layers_mut::<K, 1>(unit, Self::empty_tail(), mask, HtSpan::<A, K>(rows, mask, PhantomData));
     }
 
     #[inline(always)]
-    fn resolve_unit_rgba8<L: Arrangement>(unit: &[Row], bg: IntBackground) -> [[u8; 4]; LANES] {
-        let f = |h: &[[Row; LANES]; K], t: &[A::Tail; LANES]| lanes::hybrid_resolve_parts_rgba8(h, t, bg);
-        Self::view::<L, _>(unit, f).unwrap_or_else(|| f(&[[Row::EMPTY; LANES]; K], &[A::Tail::EMPTY; LANES]))
+    #[expect(
+        clippy::redundant_closure,
+        reason = "measured as a closure; the function as a value is called through its FnOnce shim"
+    )]
+    fn resolve_f32<L: Arrangement>(unit: &[Row]) -> ResolvedLanes {
+        Self::view_or::<L, _>(unit, |h, t| lanes::hybrid_resolve_parts(h, t), || CLEAR_LANES)
+    }
+
+    #[inline(always)]
+    fn resolve_int<L: Arrangement>(unit: &[Row], bg: IntBackground) -> [[u8; 4]; LANES] {
+        let f = |h: &Layers8<K>, t: &[A::Tail; LANES]| lanes::hybrid_resolve_parts_rgba8(h, t, bg);
+        Self::view_or::<L, _>(unit, f, || f(&[[Row::EMPTY; LANES]; K], &[A::Tail::EMPTY; LANES]))
     }
 
     /// Spans whose tails are all empty alone (their heads' resolve), the others in groups of
     /// [`HT_RESOLVE_GROUP`] (`lanes::hybrid_resolve_parts{2,4}_rgba8`: the tails' dependency
     /// chains of the group's spans overlap), the last ones two at a time and alone.
     #[inline(always)]
-    fn resolve_line_rgba8<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: IntBackground) {
+    fn resolve_line_int<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], bg: IntBackground) {
         let unit = LANES * Self::ROWS;
         let at = |i: usize| line.get(i * unit..(i + 1) * unit).unwrap_or(&[]);
         let mut put = |j: usize, r: Option<[[u8; 4]; LANES]>| {
             if let Some(o) = out.get_mut(j) {
-                *o = r.unwrap_or_else(|| Self::resolve_unit_rgba8::<L>(at(j), bg));
+                *o = r.unwrap_or_else(|| Self::resolve_int::<L>(at(j), bg));
             }
-        };
-        let pair = |i0: usize, i1: usize| {
-            Self::view::<L, _>(at(i0), |h0, t0| {
-                Self::view::<L, _>(at(i1), |h1, t1| {
-                    lanes::hybrid_resolve_parts2_rgba8([(h0, t0), (h1, t1)], bg)
-                })
-            })
-            .flatten()
         };
         let mut group = [0usize; 4];
         let mut len = 0;
@@ -494,25 +427,13 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
                 continue;
             }
             len = 0;
-            let [i0, i1, i2, i3] = group;
             if HT_RESOLVE_GROUP == 2 {
-                let two = pair(i0, i1);
-                put(i0, two.map(|r| r[0]));
-                put(i1, two.map(|r| r[1]));
+                let two = Self::resolve_pair::<L>(at, [group[0], group[1]], bg);
+                put(group[0], two.map(|r| r[0]));
+                put(group[1], two.map(|r| r[1]));
                 continue;
             }
-            let four = Self::view::<L, _>(at(i0), |h0, t0| {
-                Self::view::<L, _>(at(i1), |h1, t1| {
-                    Self::view::<L, _>(at(i2), |h2, t2| {
-                        Self::view::<L, _>(at(i3), |h3, t3| {
-                            lanes::hybrid_resolve_parts4_rgba8([(h0, t0), (h1, t1), (h2, t2), (h3, t3)], bg)
-                        })
-                    })
-                })
-            })
-            .flatten()
-            .flatten()
-            .flatten();
+            let four = Self::resolve_four::<L>(at, group, bg);
             for (k, j) in group.into_iter().enumerate() {
                 put(j, four.map(|r| r[k & 3]));
             }
@@ -521,7 +442,7 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         let mut pairs = rest.chunks_exact(2);
         for p in &mut pairs {
             if let [i0, i1] = *p {
-                let two = pair(i0, i1);
+                let two = Self::resolve_pair::<L>(at, [i0, i1], bg);
                 put(i0, two.map(|r| r[0]));
                 put(i1, two.map(|r| r[1]));
             }
@@ -531,9 +452,9 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
         }
     }
 
-    /// The integer resolve of an empty pixel (as MLAB's: an empty tail adds nothing).
-    /// An empty pixel's integer resolve (empty head rows, empty tail).
-    fn clear_rgba8(background: Background) -> [[u8; 4]; LANES] {
+    /// An empty pixel's integer resolve (empty head rows, empty tail: as MLAB's, an empty
+    /// tail adds nothing).
+    fn clear_int(background: Background) -> [[u8; 4]; LANES] {
         [crate::resolve::int::ht_rgba8(&[Row::EMPTY; K], A::Tail::EMPTY, background); LANES]
     }
 }
