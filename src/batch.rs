@@ -60,7 +60,7 @@
 //! ```
 
 use crate::fragment::Fragment;
-use crate::framebuffer::{Dims, Framebuffer, FramebufferError, SpanAt};
+use crate::framebuffer::{Dims, Framebuffer, FramebufferError, SpanAt, SpanRows};
 use crate::lanes::{FragmentLanes, LANES, LANES_U32};
 use crate::row::Row;
 
@@ -225,7 +225,14 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         let mask = q.valid | slot.rows;
         slot.mask = 0;
         slot.rows = 0;
-        fb.insert_span_at(at, &q.rows, &q.hashes, mask)
+        fb.insert_span_at(
+            at,
+            SpanRows {
+                rows: &q.rows,
+                hashes: &q.hashes,
+                mask,
+            },
+        )
     }
 
     /// Insert every pending span into the framebuffer.

@@ -7,10 +7,6 @@
 //! sizes come from the kind (`[[Row; 8]; P::ROWS]` cannot be named on stable Rust): MLAB
 //! passes `H = M, T = 0`, HT `H = K, T = 1` (the tails).
 
-// The inserts take the storage, the geometry, where, the 8 lanes' rows and hashes, the mask
-// and the kind's leaf: nine arguments, each used once, all inlined.
-#![allow(clippy::too_many_arguments)]
-
 use core::fmt::Debug;
 
 use super::dims::{Dims, SpanAt};
@@ -31,6 +27,15 @@ pub struct PixelMajor;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Spans;
 
+/// The 8 lanes of a span insert: a row and its hash per lane, and the lanes that are on.
+/// Public in a private module, as [`SpanAt`]: the batcher's flush hands it on.
+#[derive(Clone, Copy, Debug)]
+pub struct SpanRows<'r> {
+    pub(crate) rows: &'r [Row; LANES],
+    pub(crate) hashes: &'r [u32; LANES],
+    pub(crate) mask: u8,
+}
+
 /// A layer-major span: `N` layers of 8 rows.
 pub(crate) type Layers8<const N: usize> = [[Row; LANES]; N];
 
@@ -41,8 +46,8 @@ pub(crate) type Layers8<const N: usize> = [[Row; LANES]; N];
 
 /// What a span insert does to one unit of storage (a kind's span insert).
 pub(crate) trait InsertUnit {
-    /// Insert `rows` for the lanes set in `mask` into `unit`.
-    fn insert(&self, unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8);
+    /// Insert the lanes of `span` that are on into `unit`.
+    fn insert(&self, unit: &mut [Row], span: SpanRows<'_>);
 }
 
 /// A kind's insert of one pixel: on its `H` head and `T` tail rows, or on its lane of a
@@ -61,58 +66,110 @@ pub(crate) trait SpanLeaf<const H: usize, const T: usize> {
 }
 
 /// How the pixels of a [`Grid`](super::Grid) are laid out: [`PixelMajor`] or [`Spans`]
-/// (sealed). The hidden items are the storage layer's index maths and views.
+/// (sealed). The hidden items are the storage layer's index maths and views, each written
+/// once for both arrangements (`SPANS` is a constant: each grid compiles one branch).
 // `Dims` is the crate's own: the trait is sealed, no other crate implements or calls it.
 #[allow(private_interfaces, private_bounds)]
 pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + Sync + 'static {
     /// Whether pixels are stored in 8-pixel layer-major spans.
     const SPANS: bool;
+
     /// Rows of one line of `rows` slots per pixel.
     #[doc(hidden)]
-    fn line_rows(d: Dims, rows: usize) -> Option<usize>;
+    fn line_rows(d: Dims, rows: usize) -> Option<usize> {
+        let pixels = if Self::SPANS {
+            d.spans.checked_mul(LANES)?
+        } else {
+            d.width as usize
+        };
+        pixels.checked_mul(rows)
+    }
+
     /// Storage index of slot `j` of pixel `(x, y)` (checked before), `n` slots per pixel.
     #[doc(hidden)]
-    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize;
+    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize {
+        if Self::SPANS {
+            (d.span_at(x, y).index * n + j) * LANES + x as usize % LANES
+        } else {
+            d.index_unchecked(x, y) * n + j
+        }
+    }
+
     /// Which slot of its pixel storage index `i` holds, `n` slots per pixel.
     #[doc(hidden)]
-    fn slot_of(i: usize, n: usize) -> usize;
+    fn slot_of(i: usize, n: usize) -> usize {
+        if Self::SPANS { i / LANES % n } else { i % n }
+    }
+
     /// Index in the unit of one span of slot `j` of lane `lane`, `n` slots per pixel.
     #[doc(hidden)]
-    fn unit_slot(n: usize, lane: usize, j: usize) -> usize;
+    #[inline(always)]
+    fn unit_slot(n: usize, lane: usize, j: usize) -> usize {
+        if Self::SPANS { j * LANES + lane } else { lane * n + j }
+    }
+
     /// The storage of span `span` of line `y` (1 to 8 consecutive pixels, or one stored
     /// span), if it exists.
     #[doc(hidden)]
-    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]>;
-    /// A span insert at `(x, y)` (checked before; `x` any column): `f` on each unit of
-    /// storage it touches, with the lanes and the mask as they lie there.
+    #[inline(always)]
+    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]> {
+        if Self::SPANS {
+            return unit(rows, d.span_index(span, y)?, LANES * n);
+        }
+        let x = span.checked_mul(LANES_U32).filter(|&x| x < d.width && y < d.height)?;
+        let first = d.index_unchecked(x, y);
+        rows.get(first * n..(first + d.lanes_inside(x)) * n)
+    }
+
+    /// A span insert at `at` (checked before; its `x` any column): `f` on each unit of
+    /// storage it touches, with the lanes and the mask as they lie there. In spans, a span
+    /// at `x` not a multiple of 8 touches two stored spans: lane `i` lands on lane
+    /// `(i + x % 8) % 8`, of the first if `i + x % 8 < 8`, of the next one otherwise.
     #[doc(hidden)]
-    fn insert_span(
-        rows: &mut [Row],
-        d: Dims,
-        n: usize,
-        x: u32,
-        y: u32,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-        f: &impl InsertUnit,
-    );
-    /// A span insert at an aligned span (checked when it was found): `f` on its unit.
-    #[doc(hidden)]
-    fn insert_span_at(
-        rows: &mut [Row],
-        d: Dims,
-        n: usize,
-        at: SpanAt,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-        f: &impl InsertUnit,
-    );
+    #[inline(always)]
+    #[expect(
+        clippy::cast_possible_truncation,
+        reason = "the two bytes of the mask shifted into 16 bits"
+    )]
+    fn insert_span(rows: &mut [Row], d: Dims, n: usize, at: SpanAt, span: SpanRows<'_>, f: &impl InsertUnit) {
+        if !Self::SPANS {
+            let first = d.index_unchecked(at.x, at.y);
+            if let Some(px) = rows.get_mut(first * n..(first + d.lanes_inside(at.x)) * n) {
+                f.insert(px, span);
+            }
+            return;
+        }
+        let shift = at.x as usize % LANES;
+        let wide = (span.mask as u16) << shift;
+        let (m0, m1) = (wide as u8, (wide >> 8) as u8);
+        let rotated;
+        let (lanes, hashes) = if shift == 0 {
+            (span.rows, span.hashes)
+        } else {
+            rotated = (rotate(span.rows, shift), rotate(span.hashes, shift));
+            (&rotated.0, &rotated.1)
+        };
+        for (i, mask) in [(at.index, m0), (at.index + 1, m1)] {
+            if mask != 0
+                && let Some(s) = unit_mut(rows, i, LANES * n)
+            {
+                f.insert(
+                    s,
+                    SpanRows {
+                        rows: lanes,
+                        hashes,
+                        mask,
+                    },
+                );
+            }
+        }
+    }
+
     /// Pixel `(x, y)` (checked before) as `H` head and `T` tail slots: the kind's
     /// `leaf.pixel` on its rows (borrowed pixel-major; gathered from its lane and written
     /// back in spans), or, in spans where `lane_pays`, `leaf.lane` on its stored span.
     #[doc(hidden)]
+    #[inline(always)]
     fn pixel_mut<const H: usize, const T: usize>(
         rows: &mut [Row],
         d: Dims,
@@ -120,39 +177,108 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
         y: u32,
         lane_pays: bool,
         leaf: impl PixelLeaf<H, T>,
-    );
+    ) {
+        if !Self::SPANS {
+            if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), H + T)
+                && let Some((h, t)) = px.split_first_chunk_mut::<H>()
+                && let Some(t) = t.first_chunk_mut::<T>()
+            {
+                leaf.pixel(h, t);
+            }
+            return;
+        }
+        let at = d.span_at(x, y);
+        let l = x as usize % LANES;
+        let Some((head, tail)) = unit_mut(rows, at.index, LANES * (H + T)).and_then(split_span_mut::<H, T>) else {
+            return;
+        };
+        if lane_pays {
+            leaf.lane(head, tail, l);
+        } else {
+            let (mut h, mut t) = (lane_rows(head, l), lane_rows(tail, l));
+            leaf.pixel(&mut h, &mut t);
+            set_lane_rows(head, l, h);
+            set_lane_rows(tail, l, t);
+        }
+    }
+
     /// `f` of the unit of one span as `H` head and `T` tail layers (lanes past pixel-major
     /// pixels: empty rows, and `fill` in the tail layers); `or()` if the unit is not one.
     /// (Not an `Option`: returned through one, the resolves ran up to 1.17x the instructions.)
     #[doc(hidden)]
+    #[inline(always)]
     fn layers<const H: usize, const T: usize, R>(
         unit: &[Row],
         fill: Row,
         f: impl FnOnce(&Layers8<H>, &Layers8<T>) -> R,
         or: impl FnOnce() -> R,
-    ) -> R;
+    ) -> R {
+        if Self::SPANS {
+            return split_span::<H, T>(unit).map_or_else(or, |(h, t)| f(h, t));
+        }
+        let (head, tail) = gather::<H, T>(unit, fill);
+        f(&head, &tail)
+    }
+
     /// [`layers`](Self::layers), mutable, for a kind's `leaf`: a pixel-major unit's lanes
     /// set in `mask` are scattered back.
     #[doc(hidden)]
-    fn layers_mut<const H: usize, const T: usize>(unit: &mut [Row], fill: Row, mask: u8, leaf: impl SpanLeaf<H, T>);
+    #[inline(always)]
+    fn layers_mut<const H: usize, const T: usize>(unit: &mut [Row], fill: Row, mask: u8, leaf: impl SpanLeaf<H, T>) {
+        if Self::SPANS {
+            if let Some((h, t)) = split_span_mut::<H, T>(unit) {
+                leaf.span(h, t);
+            }
+            return;
+        }
+        let (mut head, mut tail) = gather::<H, T>(unit, fill);
+        leaf.span(&mut head, &mut tail);
+        scatter::<H, T>(unit, mask, &head, &tail);
+    }
+
     /// `span(layers)` of the unit of one span of `N` layers, or `pixels(px)` where it is 8
     /// whole pixel-major pixels (a kind's pixel-major cell, read without the transpose).
     #[doc(hidden)]
+    #[inline(always)]
     fn layers_or_pixels<const N: usize, R>(
         unit: &[Row],
         span: impl FnOnce(&Layers8<N>) -> R,
         pixels: impl FnOnce(&[[Row; N]; LANES]) -> R,
         or: impl FnOnce() -> R,
-    ) -> R;
+    ) -> R {
+        if Self::SPANS {
+            return as_layers::<N>(unit).map_or_else(or, span);
+        }
+        match unit.as_chunks::<N>().0.try_into() {
+            Ok(px) => pixels(px),
+            Err(_) => span(&gather::<N, 0>(unit, Row::EMPTY).0),
+        }
+    }
+
     /// The whole spans of a line (`N` slots per pixel), as stored spans (`spans`) or as
     /// groups of 8 pixel-major pixels (`pixels`).
     #[doc(hidden)]
+    #[inline(always)]
     fn lines<const N: usize, O: ?Sized>(
         line: &[Row],
         out: &mut O,
         spans: impl FnOnce(&[Layers8<N>], &mut O),
         pixels: impl FnOnce(&[[[Row; N]; LANES]], &mut O),
-    );
+    ) {
+        if Self::SPANS {
+            spans(line.as_chunks::<LANES>().0.as_chunks::<N>().0, out);
+        } else {
+            pixels(line.as_chunks::<N>().0.as_chunks::<LANES>().0, out);
+        }
+    }
+}
+
+impl Arrangement for PixelMajor {
+    const SPANS: bool = false;
+}
+
+impl Arrangement for Spans {
+    const SPANS: bool = true;
 }
 
 /// Unit `i` of `n` rows.
@@ -261,266 +387,5 @@ pub(crate) fn set_lane_rows<const N: usize>(layers: &mut Layers8<N>, lane: usize
         if let Some(slot) = layer.get_mut(lane) {
             *slot = r;
         }
-    }
-}
-
-#[allow(private_interfaces, private_bounds)]
-impl Arrangement for PixelMajor {
-    const SPANS: bool = false;
-
-    fn line_rows(d: Dims, rows: usize) -> Option<usize> {
-        (d.width as usize).checked_mul(rows)
-    }
-
-    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize {
-        d.index_unchecked(x, y) * n + j
-    }
-
-    fn slot_of(i: usize, n: usize) -> usize {
-        i % n
-    }
-
-    #[inline(always)]
-    fn unit_slot(n: usize, lane: usize, j: usize) -> usize {
-        lane * n + j
-    }
-
-    #[inline(always)]
-    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]> {
-        let x = span.checked_mul(LANES_U32).filter(|&x| x < d.width && y < d.height)?;
-        let first = d.index_unchecked(x, y);
-        rows.get(first * n..(first + d.lanes_inside(x)) * n)
-    }
-
-    #[inline(always)]
-    fn insert_span(
-        rows: &mut [Row],
-        d: Dims,
-        n: usize,
-        x: u32,
-        y: u32,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-        f: &impl InsertUnit,
-    ) {
-        let first = d.index_unchecked(x, y);
-        if let Some(px) = rows.get_mut(first * n..(first + d.lanes_inside(x)) * n) {
-            f.insert(px, span, hashes, mask);
-        }
-    }
-
-    #[inline(always)]
-    fn insert_span_at(
-        rows: &mut [Row],
-        d: Dims,
-        n: usize,
-        at: SpanAt,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-        f: &impl InsertUnit,
-    ) {
-        Self::insert_span(rows, d, n, at.x, at.y, span, hashes, mask, f);
-    }
-
-    #[inline(always)]
-    fn pixel_mut<const H: usize, const T: usize>(
-        rows: &mut [Row],
-        d: Dims,
-        x: u32,
-        y: u32,
-        _: bool,
-        leaf: impl PixelLeaf<H, T>,
-    ) {
-        if let Some(px) = unit_mut(rows, d.index_unchecked(x, y), H + T)
-            && let Some((h, t)) = px.split_first_chunk_mut::<H>()
-            && let Some(t) = t.first_chunk_mut::<T>()
-        {
-            leaf.pixel(h, t);
-        }
-    }
-
-    #[inline(always)]
-    fn layers<const H: usize, const T: usize, R>(
-        unit: &[Row],
-        fill: Row,
-        f: impl FnOnce(&Layers8<H>, &Layers8<T>) -> R,
-        _: impl FnOnce() -> R,
-    ) -> R {
-        let (head, tail) = gather::<H, T>(unit, fill);
-        f(&head, &tail)
-    }
-
-    #[inline(always)]
-    fn layers_mut<const H: usize, const T: usize>(unit: &mut [Row], fill: Row, mask: u8, leaf: impl SpanLeaf<H, T>) {
-        let (mut head, mut tail) = gather::<H, T>(unit, fill);
-        leaf.span(&mut head, &mut tail);
-        scatter::<H, T>(unit, mask, &head, &tail);
-    }
-
-    #[inline(always)]
-    fn layers_or_pixels<const N: usize, R>(
-        unit: &[Row],
-        span: impl FnOnce(&Layers8<N>) -> R,
-        pixels: impl FnOnce(&[[Row; N]; LANES]) -> R,
-        _: impl FnOnce() -> R,
-    ) -> R {
-        match unit.as_chunks::<N>().0.try_into() {
-            Ok(px) => pixels(px),
-            Err(_) => span(&gather::<N, 0>(unit, Row::EMPTY).0),
-        }
-    }
-
-    #[inline(always)]
-    fn lines<const N: usize, O: ?Sized>(
-        line: &[Row],
-        out: &mut O,
-        _: impl FnOnce(&[Layers8<N>], &mut O),
-        pixels: impl FnOnce(&[[[Row; N]; LANES]], &mut O),
-    ) {
-        pixels(line.as_chunks::<N>().0.as_chunks::<LANES>().0, out);
-    }
-}
-
-#[allow(private_interfaces, private_bounds)]
-impl Arrangement for Spans {
-    const SPANS: bool = true;
-
-    fn line_rows(d: Dims, rows: usize) -> Option<usize> {
-        d.spans.checked_mul(LANES)?.checked_mul(rows)
-    }
-
-    fn slot(d: Dims, n: usize, x: u32, y: u32, j: usize) -> usize {
-        let (i, lane) = d.span_lane(x, y);
-        (i * n + j) * LANES + lane
-    }
-
-    fn slot_of(i: usize, n: usize) -> usize {
-        i / LANES % n
-    }
-
-    #[inline(always)]
-    fn unit_slot(_: usize, lane: usize, j: usize) -> usize {
-        j * LANES + lane
-    }
-
-    #[inline(always)]
-    fn span_unit(rows: &[Row], d: Dims, n: usize, span: u32, y: u32) -> Option<&[Row]> {
-        unit(rows, d.span_index(span, y)?, LANES * n)
-    }
-
-    /// A span at `x` not a multiple of 8 touches two stored spans: lane `i` lands on lane
-    /// `(i + x % 8) % 8`, of the first if `i + x % 8 < 8`, of the next one otherwise.
-    #[inline(always)]
-    #[expect(
-        clippy::cast_possible_truncation,
-        reason = "the two bytes of the mask shifted into 16 bits"
-    )]
-    fn insert_span(
-        rows: &mut [Row],
-        d: Dims,
-        n: usize,
-        x: u32,
-        y: u32,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-        f: &impl InsertUnit,
-    ) {
-        let (i, shift) = d.span_lane(x, y);
-        let wide = (mask as u16) << shift;
-        let (m0, m1) = (wide as u8, (wide >> 8) as u8);
-        let (span, hashes) = if shift == 0 {
-            (*span, *hashes)
-        } else {
-            (rotate(span, shift), rotate(hashes, shift))
-        };
-        if m0 != 0
-            && let Some(s) = unit_mut(rows, i, LANES * n)
-        {
-            f.insert(s, &span, &hashes, m0);
-        }
-        if m1 != 0
-            && let Some(s) = unit_mut(rows, i + 1, LANES * n)
-        {
-            f.insert(s, &span, &hashes, m1);
-        }
-    }
-
-    #[inline(always)]
-    fn insert_span_at(
-        rows: &mut [Row],
-        _: Dims,
-        n: usize,
-        at: SpanAt,
-        span: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-        f: &impl InsertUnit,
-    ) {
-        if let Some(s) = unit_mut(rows, at.index, LANES * n) {
-            f.insert(s, span, hashes, mask);
-        }
-    }
-
-    #[inline(always)]
-    fn pixel_mut<const H: usize, const T: usize>(
-        rows: &mut [Row],
-        d: Dims,
-        x: u32,
-        y: u32,
-        lane_pays: bool,
-        leaf: impl PixelLeaf<H, T>,
-    ) {
-        let (i, l) = d.span_lane(x, y);
-        let Some((head, tail)) = unit_mut(rows, i, LANES * (H + T)).and_then(split_span_mut::<H, T>) else {
-            return;
-        };
-        if lane_pays {
-            leaf.lane(head, tail, l);
-        } else {
-            let (mut h, mut t) = (lane_rows(head, l), lane_rows(tail, l));
-            leaf.pixel(&mut h, &mut t);
-            set_lane_rows(head, l, h);
-            set_lane_rows(tail, l, t);
-        }
-    }
-
-    #[inline(always)]
-    fn layers<const H: usize, const T: usize, R>(
-        unit: &[Row],
-        _: Row,
-        f: impl FnOnce(&Layers8<H>, &Layers8<T>) -> R,
-        or: impl FnOnce() -> R,
-    ) -> R {
-        split_span::<H, T>(unit).map_or_else(or, |(h, t)| f(h, t))
-    }
-
-    #[inline(always)]
-    fn layers_mut<const H: usize, const T: usize>(unit: &mut [Row], _: Row, _: u8, leaf: impl SpanLeaf<H, T>) {
-        if let Some((h, t)) = split_span_mut::<H, T>(unit) {
-            leaf.span(h, t);
-        }
-    }
-
-    #[inline(always)]
-    fn layers_or_pixels<const N: usize, R>(
-        unit: &[Row],
-        span: impl FnOnce(&Layers8<N>) -> R,
-        _: impl FnOnce(&[[Row; N]; LANES]) -> R,
-        or: impl FnOnce() -> R,
-    ) -> R {
-        as_layers::<N>(unit).map_or_else(or, span)
-    }
-
-    #[inline(always)]
-    fn lines<const N: usize, O: ?Sized>(
-        line: &[Row],
-        out: &mut O,
-        spans: impl FnOnce(&[Layers8<N>], &mut O),
-        _: impl FnOnce(&[[[Row; N]; LANES]], &mut O),
-    ) {
-        spans(line.as_chunks::<LANES>().0.as_chunks::<N>().0, out);
     }
 }

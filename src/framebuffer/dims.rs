@@ -15,10 +15,10 @@ pub(crate) struct Dims {
     pub(crate) spans: usize,
 }
 
-/// Where an aligned 8-pixel span lies (lane 0 at `(x, y)`, `x` a multiple of 8), checked
-/// once ([`Dims::span_at`]): `index`, the stored span index `y * spans + x / 8` (in span
-/// storage, the span's unit), and the coordinates a pixel-major grid or a framebuffer of
-/// another crate inserts at. Public in a private module: a framebuffer of another crate can
+/// Where an 8-pixel span lies (lane 0 at `(x, y)`), checked once ([`Dims::span_at`]):
+/// `index`, the stored span index `y * spans + x / 8` (in span storage, the unit of its
+/// lane 0), and the coordinates a pixel-major grid or a framebuffer of another crate
+/// inserts at. Public in a private module: a framebuffer of another crate can
 /// neither name nor build one, so the insert that takes it is crate-private.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SpanAt {
@@ -55,29 +55,28 @@ impl Dims {
         Ok(())
     }
 
+    /// Where the span with lane 0 at `(x, y)` lies (checked before; `x` any column).
+    #[inline(always)]
+    pub(crate) fn span_at(self, x: u32, y: u32) -> SpanAt {
+        SpanAt {
+            index: y as usize * self.spans + x as usize / LANES,
+            x,
+            y,
+        }
+    }
+
     /// The aligned span of the key `y << 32 | x / 8` of a pixel `(x, y)` checked before
     /// ([`check`](Self::check)): the [`SpanBatcher`](crate::SpanBatcher)'s pending spans.
     #[inline(always)]
     #[expect(clippy::cast_possible_truncation, reason = "the key packs two u32: y << 32 | x / 8")]
     pub(crate) fn span_at_key(self, key: u64) -> SpanAt {
-        let (sx, y) = (key as u32, (key >> 32) as u32);
-        SpanAt {
-            index: y as usize * self.spans + sx as usize,
-            x: sx * LANES_U32,
-            y,
-        }
+        self.span_at(key as u32 * LANES_U32, (key >> 32) as u32)
     }
 
     /// Pixel index of `(x, y)` (checked before).
     #[inline(always)]
     pub(crate) fn index_unchecked(self, x: u32, y: u32) -> usize {
         y as usize * self.width as usize + x as usize
-    }
-
-    /// Stored span and lane of pixel `(x, y)` (checked before).
-    #[inline(always)]
-    pub(crate) fn span_lane(self, x: u32, y: u32) -> (usize, usize) {
-        (y as usize * self.spans + x as usize / LANES, x as usize % LANES)
     }
 
     /// Stored span index of span `span` of line `y`, if both are inside.

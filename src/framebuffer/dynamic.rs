@@ -14,6 +14,7 @@
 //! # Ok::<(), mlab::Error>(())
 //! ```
 
+use super::arrangement::SpanRows;
 use super::arrangement::{PixelMajor, Spans};
 use super::dims::SpanAt;
 use super::grid::Grid;
@@ -315,14 +316,8 @@ impl<'a, A: Arithmetic> Framebuffer for DynFramebuffer<'a, A> {
     // batcher's push a call of its own (HT K = 3 batched 1.24x the instructions, callgrind
     // x86-64-v3).
     #[inline(never)]
-    fn insert_span_at(
-        &mut self,
-        at: SpanAt,
-        rows: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-    ) -> Result<(), FramebufferError> {
-        each!(&mut self.0, f => f.insert_span_at(at, rows, hashes, mask))
+    fn insert_span_at(&mut self, at: SpanAt, span: SpanRows<'_>) -> Result<(), FramebufferError> {
+        each!(&mut self.0, f => f.insert_span_at(at, span))
     }
 
     #[inline]

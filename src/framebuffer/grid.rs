@@ -7,7 +7,7 @@
 
 use core::marker::PhantomData;
 
-use super::arrangement::{Arrangement, InsertUnit};
+use super::arrangement::{Arrangement, InsertUnit, SpanRows};
 use super::dims::{Dims, SpanAt};
 use super::output::Output;
 use super::pixel::Pixel;
@@ -261,37 +261,19 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     ) -> Result<(), FramebufferError> {
         self.dims.check_span(x, y, mask)?;
         if mask != 0 {
-            L::insert_span(
-                self.rows,
-                self.dims,
-                P::ROWS,
-                x,
-                y,
-                rows,
-                hashes,
-                mask,
-                &KindInsert::<P, L>(PhantomData),
-            );
+            self.insert_span_at(self.dims.span_at(x, y), SpanRows { rows, hashes, mask })?;
         }
         Ok(())
     }
 
     #[inline(always)]
-    fn insert_span_at(
-        &mut self,
-        at: SpanAt,
-        rows: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-    ) -> Result<(), FramebufferError> {
-        L::insert_span_at(
+    fn insert_span_at(&mut self, at: SpanAt, span: SpanRows<'_>) -> Result<(), FramebufferError> {
+        L::insert_span(
             self.rows,
             self.dims,
             P::ROWS,
             at,
-            rows,
-            hashes,
-            mask,
+            span,
             &KindInsert::<P, L>(PhantomData),
         );
         Ok(())
@@ -359,7 +341,7 @@ struct KindInsert<P, L>(PhantomData<(P, L)>);
 
 impl<P: Pixel, L: Arrangement> InsertUnit for KindInsert<P, L> {
     #[inline(always)]
-    fn insert(&self, unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
-        P::insert_span::<L>(unit, rows, hashes, mask);
+    fn insert(&self, unit: &mut [Row], span: SpanRows<'_>) {
+        P::insert_span::<L>(unit, span);
     }
 }

@@ -57,6 +57,7 @@ use crate::row::Row;
 
 pub use crate::error::FramebufferError;
 
+pub(crate) use arrangement::SpanRows;
 pub use arrangement::{Arrangement, PixelMajor, Spans};
 pub(crate) use dims::{Dims, SpanAt};
 pub use dynamic::{DynFramebuffer, DynPixel, Layers};
@@ -217,14 +218,8 @@ pub trait Framebuffer {
     #[doc(hidden)]
     #[inline(always)]
     #[allow(private_interfaces)]
-    fn insert_span_at(
-        &mut self,
-        at: SpanAt,
-        rows: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-    ) -> Result<(), FramebufferError> {
-        self.insert_span_hashed(at.x, at.y, rows, hashes, mask)
+    fn insert_span_at(&mut self, at: SpanAt, span: SpanRows<'_>) -> Result<(), FramebufferError> {
+        self.insert_span_hashed(at.x, at.y, span.rows, span.hashes, span.mask)
     }
 
     /// Insert a fragment at `(x, y)`, quantized by [`Self::Arith`](Arithmetic::quantize)

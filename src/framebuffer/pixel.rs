@@ -10,7 +10,7 @@
 use core::fmt::Debug;
 use core::marker::PhantomData;
 
-use super::arrangement::{Arrangement, Layers8, PixelLeaf, SpanLeaf, lane_rows, set_lane_rows};
+use super::arrangement::{Arrangement, Layers8, PixelLeaf, SpanLeaf, SpanRows, lane_rows, set_lane_rows};
 use super::dims::Dims;
 use super::{CLEAR_LANES, Layers};
 use crate::arith::{Arithmetic, Unbiased};
@@ -83,7 +83,7 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// arrangement `L`: a stored span, or 1 to 8 consecutive pixel-major pixels (the lanes
     /// past them are off).
     #[doc(hidden)]
-    fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8);
+    fn insert_span<L: Arrangement>(unit: &mut [Row], span: SpanRows<'_>);
     /// The f32 resolve of the storage of one span (as for `insert_span`), lanes past its
     /// pixels clear.
     #[doc(hidden)]
@@ -124,13 +124,14 @@ impl<A: Arithmetic, const M: usize> PixelLeaf<M, 0> for MlabRow<A, M> {
     }
 }
 
-/// MLAB's span insert: Listing 1 in lanes, for the lanes set in the mask.
-struct MlabSpan<'r, A, const M: usize>(&'r [Row; LANES], &'r [u32; LANES], u8, PhantomData<A>);
+/// MLAB's span insert: Listing 1 in lanes, for the lanes that are on.
+struct MlabSpan<'r, A, const M: usize>(SpanRows<'r>, PhantomData<A>);
 
 impl<A: Arithmetic, const M: usize> SpanLeaf<M, 0> for MlabSpan<'_, A, M> {
     #[inline(always)]
     fn span(self, span: &mut Layers8<M>, _: &mut Layers8<0>) {
-        lanes::mlab_insert_hashed::<A, M>(span, self.0, self.1, self.2);
+        let SpanRows { rows, hashes, mask } = self.0;
+        lanes::mlab_insert_hashed::<A, M>(span, rows, hashes, mask);
     }
 }
 
@@ -160,14 +161,15 @@ impl<A: Arithmetic, const K: usize> PixelLeaf<K, 1> for HtRow<A, K> {
     }
 }
 
-/// HT's span insert: Listing 2 in lanes on the head layers and tails, for the lanes set in
-/// the mask.
-struct HtSpan<'r, A, const K: usize>(&'r [Row; LANES], u8, PhantomData<A>);
+/// HT's span insert: Listing 2 in lanes on the head layers and tails, for the lanes that are
+/// on (the hashes unread).
+struct HtSpan<'r, A, const K: usize>(SpanRows<'r>, PhantomData<A>);
 
 impl<A: Arithmetic, const K: usize> SpanLeaf<K, 1> for HtSpan<'_, A, K> {
     #[inline(always)]
     fn span(self, head: &mut Layers8<K>, [tails]: &mut Layers8<1>) {
-        lanes::hybrid_insert_parts(head, bytemuck::cast_mut::<_, [A::Tail; LANES]>(tails), self.0, self.1);
+        let tails = bytemuck::cast_mut::<_, [A::Tail; LANES]>(tails);
+        lanes::hybrid_insert_parts(head, tails, self.0.rows, self.0.mask);
     }
 }
 
@@ -215,13 +217,8 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     }
 
     #[inline(always)]
-    fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) {
-        L::layers_mut::<M, 0>(
-            unit,
-            Row::EMPTY,
-            mask,
-            MlabSpan::<A, M>(rows, hashes, mask, PhantomData),
-        );
+    fn insert_span<L: Arrangement>(unit: &mut [Row], span: SpanRows<'_>) {
+        L::layers_mut::<M, 0>(unit, Row::EMPTY, span.mask, MlabSpan::<A, M>(span, PhantomData));
     }
 
     /// 8 whole pixel-major pixels: MLAB's pixel-major cell, without the transpose.
@@ -236,7 +233,7 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
     #[inline(always)]
     fn resolve_int<L: Arrangement>(unit: &[Row], bg: IntBackground) -> [[u8; 4]; LANES] {
         let span = |l: &Layers8<M>| lanes::mlab_resolve_rgba8(l, bg);
-        let whole = |px: &[[Row; M]; LANES]| lanes::mlab_resolve_pixel_major_rgba8(px, bg);
+        let whole = |px: &[[Row; M]; LANES]| lanes::mlab_resolve_rgba8(lanes::PixelCell(px), bg);
         L::layers_or_pixels::<M, _>(unit, span, whole, || span(&[[Row::EMPTY; LANES]; M]))
     }
 
@@ -247,8 +244,8 @@ impl<const M: usize, A: Arithmetic> Pixel for Mlab<M, A> {
         L::lines::<M, _>(
             line,
             out,
-            |spans, out| lanes::mlab_resolve_line_rgba8(spans, out, bg),
-            |pixels, out| lanes::mlab_resolve_pixel_major_line_rgba8(pixels, out, bg),
+            |spans, out| lanes::mlab_resolve_line_rgba8(spans.iter(), out, bg),
+            |pixels, out| lanes::mlab_resolve_line_rgba8(pixels.iter().map(lanes::PixelCell), out, bg),
         );
     }
 
@@ -381,8 +378,8 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     }
 
     #[inline(always)]
-    fn insert_span<L: Arrangement>(unit: &mut [Row], rows: &[Row; LANES], _: &[u32; LANES], mask: u8) {
-        L::layers_mut::<K, 1>(unit, Self::empty_tail(), mask, HtSpan::<A, K>(rows, mask, PhantomData));
+    fn insert_span<L: Arrangement>(unit: &mut [Row], span: SpanRows<'_>) {
+        L::layers_mut::<K, 1>(unit, Self::empty_tail(), span.mask, HtSpan::<A, K>(span, PhantomData));
     }
 
     #[inline(always)]

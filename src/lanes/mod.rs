@@ -94,8 +94,8 @@ use w512::{Mask8 as HtMask8, Rows8 as HtRows8};
 pub use backend::BACKEND;
 pub use quantize::{FragmentLanes, QuantizedLanes};
 pub(crate) use resolve_int::{
-    hybrid_resolve_head_rgba8, hybrid_resolve_parts_rgba8, hybrid_resolve_parts2_rgba8, hybrid_resolve_parts4_rgba8,
-    mlab_resolve_line_rgba8, mlab_resolve_pixel_major_line_rgba8, mlab_resolve_pixel_major_rgba8, mlab_resolve_rgba8,
+    PixelCell, hybrid_resolve_head_rgba8, hybrid_resolve_parts_rgba8, hybrid_resolve_parts2_rgba8,
+    hybrid_resolve_parts4_rgba8, mlab_resolve_line_rgba8, mlab_resolve_rgba8,
 };
 
 /// Pixels per lane group.

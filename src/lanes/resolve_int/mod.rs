@@ -21,26 +21,29 @@ use crate::resolve::int::IntBackground;
 use crate::row::Row;
 use crate::tail::TailFormat;
 
-/// The integer RGBA8 resolve of an MLAB span (layer-major).
-#[inline(always)]
-pub(super) fn mlab_resolve_rgba8_int<const M: usize, const OPAQUE: bool>(
-    span: &MlabSpan<M>,
-    bg: [u32; 3],
-) -> [[u8; 4]; LANES] {
-    int8::resolve::<OPAQUE>(M, |j| span.get(j).copied().unwrap_or([Row::EMPTY; LANES]), bg)
+/// 8 MLAB pixels of `M` rows as the integer resolve reads them: layer-major (a stored span,
+/// `&MlabSpan<M>`) or pixel-major ([`PixelCell`]).
+pub(crate) trait Cell<const M: usize> {
+    /// The 8 rows of layer `j < M`.
+    fn layer(&self, j: usize) -> [Row; LANES];
 }
 
-/// The integer RGBA8 resolve of 8 pixels stored pixel-major (`pixels[lane][layer]`).
-#[inline(always)]
-pub(super) fn mlab_resolve_pixel_major_rgba8_int<const M: usize, const OPAQUE: bool>(
-    pixels: &[[Row; M]; LANES],
-    bg: [u32; 3],
-) -> [[u8; 4]; LANES] {
-    int8::resolve::<OPAQUE>(
-        M,
-        |j| core::array::from_fn(|p| pixels[p].get(j).copied().unwrap_or(Row::EMPTY)),
-        bg,
-    )
+impl<const M: usize> Cell<M> for &MlabSpan<M> {
+    #[inline(always)]
+    fn layer(&self, j: usize) -> [Row; LANES] {
+        self.get(j).copied().unwrap_or([Row::EMPTY; LANES])
+    }
+}
+
+/// 8 pixels stored pixel-major (`pixels[lane][layer]`), read without a transpose.
+#[derive(Clone, Copy)]
+pub(crate) struct PixelCell<'a, const M: usize>(pub(crate) &'a [[Row; M]; LANES]);
+
+impl<const M: usize> Cell<M> for PixelCell<'_, M> {
+    #[inline(always)]
+    fn layer(&self, j: usize) -> [Row; LANES] {
+        core::array::from_fn(|p| self.0[p].get(j).copied().unwrap_or(Row::EMPTY))
+    }
 }
 
 /// `$e` with the const `$opaque` true and `$bg` the background's channels for an opaque
@@ -62,48 +65,25 @@ macro_rules! by_background {
     };
 }
 
-/// The integer RGBA8 resolve ([`mlab_resolve_rgba8`]) of 8 pixels stored pixel-major.
-#[inline(always)]
-pub(crate) fn mlab_resolve_pixel_major_rgba8<const M: usize>(
-    pixels: &[[Row; M]; LANES],
-    background: IntBackground,
-) -> [[u8; 4]; LANES] {
-    by_background!(background, |O, bg| mlab_resolve_pixel_major_rgba8_int::<M, O>(
-        pixels, bg
-    ))
-}
-
-/// [`mlab_resolve_pixel_major_rgba8`] of whole spans of pixel-major pixels into `out`, the
-/// background's case chosen once.
-#[inline(always)]
-pub(crate) fn mlab_resolve_pixel_major_line_rgba8<const M: usize>(
-    pixels: &[[[Row; M]; LANES]],
-    out: &mut [[[u8; 4]; LANES]],
-    background: IntBackground,
-) {
-    let pairs = out.iter_mut().zip(pixels);
-    by_background!(background, |O, bg| pairs
-        .for_each(|(o, p)| *o = mlab_resolve_pixel_major_rgba8_int::<M, O>(p, bg)))
-}
-
-/// [`mlab_resolve_rgba8`] of whole stored spans into `out`, the background's case chosen once.
-#[inline(always)]
-pub(crate) fn mlab_resolve_line_rgba8<const M: usize>(
-    spans: &[MlabSpan<M>],
-    out: &mut [[[u8; 4]; LANES]],
-    background: IntBackground,
-) {
-    let pairs = out.iter_mut().zip(spans);
-    by_background!(background, |O, bg| pairs
-        .for_each(|(o, s)| *o = mlab_resolve_rgba8_int::<M, O>(s, bg)))
-}
-
-/// The integer RGBA8 resolve of an MLAB span (`docs/layout.md`, "Integer resolve"; what
+/// The integer RGBA8 resolve of 8 MLAB pixels (`docs/layout.md`, "Integer resolve"; what
 /// [`Framebuffer::resolve_rgba8`](crate::Framebuffer::resolve_rgba8) writes for MLAB), in
 /// 16-bit lanes: byte-identical to the scalar `resolve::int::rgba8` of each pixel.
 #[inline(always)]
-pub(crate) fn mlab_resolve_rgba8<const M: usize>(span: &MlabSpan<M>, background: IntBackground) -> [[u8; 4]; LANES] {
-    by_background!(background, |O, bg| mlab_resolve_rgba8_int::<M, O>(span, bg))
+pub(crate) fn mlab_resolve_rgba8<const M: usize>(cell: impl Cell<M>, background: IntBackground) -> [[u8; 4]; LANES] {
+    by_background!(background, |O, bg| int8::resolve::<M, O>(cell, bg))
+}
+
+/// [`mlab_resolve_rgba8`] of the whole spans of a line into `out`, the background's case
+/// chosen once.
+#[inline(always)]
+pub(crate) fn mlab_resolve_line_rgba8<const M: usize, C: Cell<M>>(
+    cells: impl Iterator<Item = C>,
+    out: &mut [[[u8; 4]; LANES]],
+    background: IntBackground,
+) {
+    let pairs = out.iter_mut().zip(cells);
+    by_background!(background, |O, bg| pairs
+        .for_each(|(o, c)| *o = int8::resolve::<M, O>(c, bg)))
 }
 
 /// The HT resolve of separate head layers and tails straight to RGBA8: the integer resolve
@@ -202,7 +182,7 @@ mod tests {
                 "M = {M} spans {bg:?}: {pixels:?}"
             );
             assert_eq!(
-                lanes::mlab_resolve_pixel_major_rgba8(&pixels, int::background(bg)),
+                lanes::mlab_resolve_rgba8(lanes::PixelCell(&pixels), int::background(bg)),
                 want,
                 "M = {M} pixel-major {bg:?}: {pixels:?}"
             );

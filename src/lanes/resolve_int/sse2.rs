@@ -5,6 +5,7 @@
 //! `(p + 16384) >> 15`). The doubled factors `[256 R, 256 G, 256 B, 2 floor(257 T / 2)]` are one
 //! `punpcklbw` of the rows with their T bytes `& 0xfe` (`257 T & !1 = 2 floor(257 T / 2)`).
 
+use super::Cell;
 use crate::lanes::LANES;
 use crate::resolve::int;
 use crate::row::Row;
@@ -38,19 +39,16 @@ fn layer(acc: &mut i16x8, v2: &mut u16x8, f2: u16x8) {
     *v2 = v + v;
 }
 
-/// The integer resolve of `m` layers of 8 pixels, as the SSSE3/AVX2 form computes it.
+/// The integer resolve of the `M` layers of 8 pixels of `cell`, as the SSSE3/AVX2 form
+/// computes it.
 #[inline(always)]
-pub(super) fn resolve<const OPAQUE: bool>(
-    m: usize,
-    layer_rows: impl Fn(usize) -> [Row; LANES],
-    bg: [u32; 3],
-) -> [[u8; 4]; LANES] {
+pub(super) fn resolve<const M: usize, const OPAQUE: bool>(cell: impl Cell<M>, bg: [u32; 3]) -> [[u8; 4]; LANES] {
     let start = int::ACC_START as i16;
     let alpha = if OPAQUE { int::ACC_MAX as i16 } else { start };
     let mut acc = [i16x8::new(core::array::from_fn(|i| if i % 4 == 3 { alpha } else { start })); 4];
     let mut v2 = [u16x8::splat(2 * int::VIS_ONE as u16); 4];
-    for j in 0..m {
-        let l = layer_rows(j);
+    for j in 0..M {
+        let l = cell.layer(j);
         for k in 0..4 {
             layer(&mut acc[k], &mut v2[k], factors([l[2 * k], l[2 * k + 1]]));
         }

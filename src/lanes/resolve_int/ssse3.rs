@@ -2,6 +2,7 @@
 //! each pixel's four 16-bit slots `[R, G, B, T]` (its 8 bytes of a 128-bit half). Per layer,
 //! one shuffle, one shift, one `pmulhrsw`, one saturating add and one shuffle.
 
+use super::Cell;
 use crate::lanes::LANES;
 use crate::resolve::int;
 use crate::row::Row;
@@ -51,17 +52,13 @@ pub(super) fn layer(acc: &mut i16x16, v: &mut i16x16, f: i16x16) {
     *v = cast(cast::<i16x16, i8x32>(p).swizzle_half(halves(BROADCAST_T)));
 }
 
-/// Eq. 5 in integers over `m` layers of 8 pixels (`layer(j)`: the factors of pixels 0..4
-/// and 4..8), then the pixels (`int::pixel` per lane): over the opaque background `bg`
-/// when `OPAQUE`, else premultiplied (`bg` unused).
+/// Eq. 5 in integers over the `M` layers of 8 pixels of `cell` (`layer_factors(j)`: the
+/// factors of pixels 0..4 and 4..8), then the pixels (`int::pixel` per lane): over the
+/// opaque background `bg` when `OPAQUE`, else premultiplied (`bg` unused).
 #[inline(always)]
-pub(super) fn resolve<const OPAQUE: bool>(
-    m: usize,
-    layer_rows: impl Fn(usize) -> [Row; LANES],
-    bg: [u32; 3],
-) -> [[u8; 4]; LANES] {
+pub(super) fn resolve<const M: usize, const OPAQUE: bool>(cell: impl Cell<M>, bg: [u32; 3]) -> [[u8; 4]; LANES] {
     let layer_factors = |j: usize| {
-        let l = layer_rows(j);
+        let l = cell.layer(j);
         [factors([l[0], l[1], l[2], l[3]]), factors([l[4], l[5], l[6], l[7]])]
     };
     // Over an opaque background slot 3 (the visibility products, not read) starts at
@@ -71,7 +68,7 @@ pub(super) fn resolve<const OPAQUE: bool>(
     let alpha = if OPAQUE { int::ACC_MAX as i16 } else { start };
     let mut acc = [i16x16::new(core::array::from_fn(|i| if i % 4 == 3 { alpha } else { start })); 2];
     let mut v = [i16x16::splat(int::VIS_ONE as i16); 2];
-    for j in 0..m {
+    for j in 0..M {
         let f = layer_factors(j);
         layer(&mut acc[0], &mut v[0], f[0]);
         layer(&mut acc[1], &mut v[1], f[1]);
