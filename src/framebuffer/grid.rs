@@ -261,21 +261,15 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     ) -> Result<(), FramebufferError> {
         self.dims.check_span(x, y, mask)?;
         if mask != 0 {
-            self.insert_span_at(self.dims.span_at(x, y), SpanRows { rows, hashes, mask })?;
+            let (at, span) = (self.dims.span_at(x, y), SpanRows { rows, hashes, mask });
+            L::insert_span::<KindInsert<P, L>>(self.rows, self.dims, P::ROWS, at, span);
         }
         Ok(())
     }
 
     #[inline(always)]
     fn insert_span_at(&mut self, at: SpanAt, span: SpanRows<'_>) -> Result<(), FramebufferError> {
-        L::insert_span(
-            self.rows,
-            self.dims,
-            P::ROWS,
-            at,
-            span,
-            &KindInsert::<P, L>(PhantomData),
-        );
+        L::insert_aligned::<KindInsert<P, L>>(self.rows, self.dims, P::ROWS, at, span);
         Ok(())
     }
 
@@ -341,7 +335,7 @@ struct KindInsert<P, L>(PhantomData<(P, L)>);
 
 impl<P: Pixel, L: Arrangement> InsertUnit for KindInsert<P, L> {
     #[inline(always)]
-    fn insert(&self, unit: &mut [Row], span: SpanRows<'_>) {
+    fn insert(unit: &mut [Row], span: SpanRows<'_>) {
         P::insert_span::<L>(unit, span);
     }
 }
