@@ -74,7 +74,9 @@ pub const HT_RESOLVE: &str = include_str!("wgsl/ht_resolve.wgsl");
 /// binary search per pixel); binding layout at the top of the text and in `docs/gpu.md`.
 pub const SORT: &str = include_str!("wgsl/sort.wgsl");
 
-/// The compositor's bindings and helpers (see [`compositor()`]).
+/// The compositor's bindings, helpers and entry points (`composite`, `resolve`; see
+/// [`compositor()`]), then a method's pair of texts: the `composite_pixel` (MLAB, HT) and the
+/// `composite_resolve_pixel` (MLAB, HT) that the entry points call.
 const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");
 const COMPOSITE_MLAB: &str = include_str!("wgsl/composite_mlab.wgsl");
 const COMPOSITE_HT: &str = include_str!("wgsl/composite_ht.wgsl");
