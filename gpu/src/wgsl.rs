@@ -60,11 +60,12 @@ pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
 
 /// The integer RGBA8 resolve of HT (`docs/layout.md`, "Integer resolve of HT"): the tail
 /// decoders `ht_tail_fields_paper` and `ht_tail_fields_wide` (both return the struct
-/// `ht_fields`: three color sums, alpha sum, count), the rounded Q16 product `mlab_q16`, the
+/// `ht_fields`: three color sums, alpha sum, count), the rounded Q16 product `mlab_q16`, its
+/// Horner sums `ht_horner(coefficients, x)` (an `array<u32, 8>`, lowest first, written out), the
 /// tail's `(T, g)` in Q16 (`ht_tail_resolve(alpha, count) -> vec2<u32>`, which uses nothing
-/// but `mlab_q16`), and `ht_resolve_rgba8(&head, tail, background)` (the bytes of the kernel's
-/// `resolve_rgba8` pixel as `R | G << 8 | B << 16 | A << 24`), which needs `HT_K`,
-/// `ht_tail_fields` and [`KERNEL`] ([`hybrid()`] has them all). The background is the
+/// but `mlab_q16` and `ht_horner`), and `ht_resolve_rgba8(&head, tail, background)` (the bytes
+/// of the kernel's `resolve_rgba8` pixel as `R | G << 8 | B << 16 | A << 24`), which needs
+/// `HT_K`, `ht_tail_fields` and [`KERNEL`] ([`hybrid()`] has them all). The background is the
 /// `vec4<u32>` of [`crate::background_q15`], computed on the CPU.
 pub const HT_RESOLVE: &str = include_str!("wgsl/ht_resolve.wgsl");
 
