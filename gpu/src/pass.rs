@@ -25,7 +25,9 @@ const fn chunk(layers: Layers) -> u32 {
 }
 
 crate::device::uniform! {
-    /// The uniform of `composite.wgsl` (`CompositeParams`).
+    /// The host side of `composite.wgsl`'s uniform (binding 0, `CompositeParams`): the bytes
+    /// uploaded for each dispatch, so it repeats the WGSL struct field for field (the test
+    /// `the_uniforms_match_the_wgsl_structs` compares the two).
     Params {
         pixels: u32,
         pitch: u32,

@@ -30,7 +30,9 @@ pub enum Sort {
 }
 
 crate::device::uniform! {
-    /// The uniform of `sort.wgsl` (`SortParams`).
+    /// The host side of `sort.wgsl`'s uniform (binding 0, `SortParams`): the bytes uploaded for
+    /// each dispatch, so it repeats the WGSL struct field for field (the test
+    /// `the_uniforms_match_the_wgsl_structs` compares the two).
     SortParams {
         count: u32,
         size: u32,

@@ -60,11 +60,12 @@ pub const HT_INSERT: &str = include_str!("wgsl/ht.wgsl");
 
 /// The integer RGBA8 resolve of HT (`docs/layout.md`, "Integer resolve of HT"): the tail
 /// decoders `ht_tail_fields_paper` and `ht_tail_fields_wide` (both return the struct
-/// `ht_fields`: three color sums, alpha sum, count), the rounded Q16 product `mlab_q16`, the
+/// `ht_fields`: three color sums, alpha sum, count), the rounded Q16 product `mlab_q16`, its
+/// Horner sums `ht_horner(coefficients, x)` (an `array<u32, 8>`, lowest first, written out), the
 /// tail's `(T, g)` in Q16 (`ht_tail_resolve(alpha, count) -> vec2<u32>`, which uses nothing
-/// but `mlab_q16`), and `ht_resolve_rgba8(&head, tail, background)` (the bytes of the kernel's
-/// `resolve_rgba8` pixel as `R | G << 8 | B << 16 | A << 24`), which needs `HT_K`,
-/// `ht_tail_fields` and [`KERNEL`] ([`hybrid()`] has them all). The background is the
+/// but `mlab_q16` and `ht_horner`), and `ht_resolve_rgba8(&head, tail, background)` (the bytes
+/// of the kernel's `resolve_rgba8` pixel as `R | G << 8 | B << 16 | A << 24`), which needs
+/// `HT_K`, `ht_tail_fields` and [`KERNEL`] ([`hybrid()`] has them all). The background is the
 /// `vec4<u32>` of [`crate::background_q15`], computed on the CPU.
 pub const HT_RESOLVE: &str = include_str!("wgsl/ht_resolve.wgsl");
 
@@ -74,7 +75,9 @@ pub const HT_RESOLVE: &str = include_str!("wgsl/ht_resolve.wgsl");
 /// binary search per pixel); binding layout at the top of the text and in `docs/gpu.md`.
 pub const SORT: &str = include_str!("wgsl/sort.wgsl");
 
-/// The compositor's bindings and helpers (see [`compositor()`]).
+/// The compositor's bindings, helpers and entry points (`composite`, `resolve`; see
+/// [`compositor()`]), then a method's pair of texts: the `composite_pixel` (MLAB, HT) and the
+/// `composite_resolve_pixel` (MLAB, HT) that the entry points call.
 const COMPOSITE: &str = include_str!("wgsl/composite.wgsl");
 const COMPOSITE_MLAB: &str = include_str!("wgsl/composite_mlab.wgsl");
 const COMPOSITE_HT: &str = include_str!("wgsl/composite_ht.wgsl");

@@ -43,6 +43,29 @@ fn random_stream(rng: &mut Rng, w: u32, h: u32, n: usize) -> Vec<GpuFragment> {
         .collect()
 }
 
+/// The binding cap of the band tests: 16 KiB, which splits [`banded_stream`]'s frame into bands
+/// of one line.
+const BAND_BYTES: u64 = 16384;
+
+/// The band tests' frame and stream: 30 x 40 pixels and 15,000 random fragments, most with
+/// stable keys. About 12 KB of fragments per line (12.5 per pixel, 32 bytes each) and 1 KB of
+/// rows: [`BAND_BYTES`] bindings split the frame into bands of one line.
+fn banded_stream(rng: &mut Rng) -> (u32, u32, Vec<GpuFragment>) {
+    let (w, h) = (30, 40);
+    let frags = random_stream(rng, w, h, 15_000);
+    (w, h, rng.keyed(frags))
+}
+
+/// `run` on the whole frame, then with bindings capped at [`BAND_BYTES`] (which `c` keeps): the
+/// same result, which it returns.
+fn same_in_bands<T: PartialEq + std::fmt::Debug>(c: &mut Compositor, run: impl Fn(&Compositor) -> T) -> T {
+    let whole = run(c);
+    c.set_max_binding_bytes(BAND_BYTES);
+    assert_eq!(c.max_binding_bytes(), BAND_BYTES);
+    assert_eq!(run(c), whole, "bands against one band");
+    whole
+}
+
 #[test]
 fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
     let Some(gpu) = gpu("random_streams") else { return };
@@ -246,17 +269,10 @@ fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
 fn bands_split_by_the_binding_limit_give_the_same_words() {
     let Some(gpu) = gpu("bands") else { return };
     let mut rng = Rng(99);
-    let (w, h) = (30, 40);
-    let frags = random_stream(&mut rng, w, h, 15_000);
-    let frags = rng.keyed(frags);
+    let (w, h, frags) = banded_stream(&mut rng);
     for layout in [Layout::PixelMajor, Layout::Spans] {
         let mut c = Compositor::new(&gpu, Layers::Hybrid(3), ArithKind::Unbiased, layout).expect("compositor");
-        let whole = c.composite(w, h, &frags).expect("one band");
-        // About 12 KB of fragments per line (12.5 per pixel, 32 bytes each) and 1 KB of rows:
-        // 16 KiB bindings split the frame into bands of one line.
-        c.set_max_binding_bytes(16384);
-        assert_eq!(c.max_binding_bytes(), 16384);
-        assert_eq!(c.composite(w, h, &frags).expect("bands"), whole);
+        same_in_bands(&mut c, |c| c.composite(w, h, &frags).expect("rows"));
         check(&c, Layers::Hybrid(3), ArithKind::Unbiased, layout, w, h, &frags);
         // One line with more fragments than a binding holds is a typed error.
         let crowded: Vec<GpuFragment> = (0..1000).map(|_| rng.fragment(0)).collect();
@@ -478,23 +494,17 @@ fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
         }
     }
     println!("rgba8: {total} fragments, identical images");
-    // Bands give the same image (MLAB here, HT below: HT's RGBA8 is tests/ht_rgba8.rs); about
-    // 12 KB of fragments per line (32 bytes each), bands of one line in 16 KiB bindings.
-    let frags = random_stream(&mut rng, 30, 40, 15_000);
-    let frags = rng.keyed(frags);
+    // Bands give the same image (MLAB here, HT below: HT's RGBA8 is tests/ht_rgba8.rs).
+    let (w, h, frags) = banded_stream(&mut rng);
     let bg = Background::Opaque(Vec3::new(0.2, 0.4, 0.6));
     let mut c = Compositor::new(&gpu, Layers::Mlab(4), ArithKind::Unbiased, Layout::Spans).expect("compositor");
-    let whole = c.composite_rgba8(30, 40, &frags, bg).expect("one band");
-    c.set_max_binding_bytes(16384);
-    assert_eq!(c.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
+    same_in_bands(&mut c, |c| c.composite_rgba8(w, h, &frags, bg).expect("rgba8"));
     let mut ht = Compositor::new(&gpu, Layers::Hybrid(3), ArithKind::Unbiased, Layout::Spans).expect("compositor");
-    let whole = ht.composite_rgba8(30, 40, &frags, bg).expect("one band");
+    let (_, image) = same_in_bands(&mut ht, |c| c.composite_rgba8(w, h, &frags, bg).expect("rgba8"));
     assert_eq!(
-        whole.1,
-        cpu::resolve_rgba8(Layers::Hybrid(3), ArithKind::Unbiased, 30, 40, &frags, bg).expect("cpu")
+        image,
+        cpu::resolve_rgba8(Layers::Hybrid(3), ArithKind::Unbiased, w, h, &frags, bg).expect("cpu")
     );
-    ht.set_max_binding_bytes(16384);
-    assert_eq!(ht.composite_rgba8(30, 40, &frags, bg).expect("bands"), whole);
 }
 
 // The sort by pixel on the GPU (`Sort::Gpu`). The default is `Sort::Cpu` on a software adapter
@@ -567,13 +577,13 @@ fn the_gpu_sort_over_several_bands_is_the_stable_order() {
     let Some(gpu) = gpu("gpu_sort_bands") else { return };
     let mut rng = Rng(0x6261_6e64);
     // 30 x 40 with 8 fragments per pixel: about 7.7 KB of fragments per line, so a 16 KiB
-    // binding cap gives bands of two lines (20 bands), each sorted on its own.
+    // binding cap (`BAND_BYTES`) gives bands of two lines (20 bands), each sorted on its own.
     let frags = shuffled_coplanar(&mut rng, 30, 40, 8);
     for layout in [Layout::PixelMajor, Layout::Spans] {
         let mut c = Compositor::new(&gpu, Layers::Mlab(3), ArithKind::Paper, layout).expect("compositor");
         c.set_sort(Sort::Gpu);
-        c.set_max_binding_bytes(16384);
-        assert_eq!(c.order(30, 40, &frags).expect("order"), stable_order(&frags));
+        let order = same_in_bands(&mut c, |c| c.order(30, 40, &frags).expect("order"));
+        assert_eq!(order, stable_order(&frags));
         check(&c, Layers::Mlab(3), ArithKind::Paper, layout, 30, 40, &frags);
     }
 }

@@ -49,6 +49,11 @@ struct CompositeParams {
 // Written only by the entry point `resolve` (composite_resolve.wgsl, composite_resolve_ht.wgsl).
 @group(0) @binding(4) var<storage, read_write> composite_image: array<u32>;
 
+// The stored pixel of invocation gid of the 2-D dispatch (`pitch` invocations per row).
+fn composite_invocation(gid: vec3<u32>) -> u32 {
+    return gid.y * composite_params.pitch + gid.x;
+}
+
 // The fragments stored pixel p inserts in this `composite` dispatch, as positions start .. end
 // in pixel order (`composite_fragment_at`); start > end: nothing to do (past the dispatch's
 // pixels, or an earlier dispatch inserted all of the pixel's fragments and its rows are final).
@@ -111,4 +116,38 @@ fn composite_fragment_at(i: u32) -> composite_fragment {
     let key = select(mlab_content_key(c, a, z), composite_fragments[k + 6u], composite_fragments[k + 7u] != 0u);
     let h = mlab_fragment_hash(key, composite_fragments[k]);
     return composite_fragment(mlab_quantize(c, a, z, h), h);
+}
+
+// Slot j (of `slots` per pixel) of stored pixel p as this `composite` dispatch starts: `empty`
+// (MLAB_EMPTY_ROW, MLAB_EMPTY_TAIL) in the first dispatch, else what the previous one stored.
+fn composite_load(p: u32, j: u32, slots: u32, empty: vec2<u32>) -> vec2<u32> {
+    return select(composite_rows[composite_slot(p, j, slots)], empty, composite_params.first == 0u);
+}
+
+// The entry points. Each method's text (composite_mlab.wgsl, composite_ht.wgsl) defines
+// composite_pixel(p, range), which loads stored pixel p's slots, inserts its fragments
+// range.x .. range.y and stores the slots back; its resolve text (composite_resolve.wgsl,
+// composite_resolve_ht.wgsl) defines composite_resolve_pixel(p), the RGBA8 pixel of its slots.
+
+// Every stored pixel of the dispatch inserts its fragments of this dispatch (composite_range).
+@compute @workgroup_size(64)
+fn composite(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = composite_invocation(gid);
+    let range = composite_range(p);
+    if (range.x > range.y) {
+        return;
+    }
+    composite_pixel(p, range);
+}
+
+// The integer RGBA8 resolve of every image pixel of the dispatch (padding lanes skipped), after
+// the `composite` dispatches: the bytes of the kernel's Framebuffer::resolve_rgba8.
+@compute @workgroup_size(64)
+fn resolve(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let p = composite_invocation(gid);
+    let i = composite_image_index(p);
+    if (i == COMPOSITE_NONE) {
+        return;
+    }
+    composite_image[i] = composite_resolve_pixel(p);
 }

@@ -1,16 +1,12 @@
 
-@compute @workgroup_size(64)
-fn composite(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let p = gid.y * composite_params.pitch + gid.x;
-    let range = composite_range(p);
-    if (range.x > range.y) {
-        return;
-    }
+// HT's composite_pixel: the HT_K head rows (slots 0 .. HT_K) and the tail (slot HT_K), each
+// fragment inserted by Listing 2 (ht_insert).
+fn composite_pixel(p: u32, range: vec2<u32>) {
     var head: array<vec2<u32>, HT_K>;
     for (var j = 0u; j < HT_K; j++) {
-        head[j] = select(composite_rows[composite_slot(p, j, HT_K + 1u)], MLAB_EMPTY_ROW, composite_params.first == 0u);
+        head[j] = composite_load(p, j, HT_K + 1u, MLAB_EMPTY_ROW);
     }
-    var tail = select(composite_rows[composite_slot(p, HT_K, HT_K + 1u)], MLAB_EMPTY_TAIL, composite_params.first == 0u);
+    var tail = composite_load(p, HT_K, HT_K + 1u, MLAB_EMPTY_TAIL);
     for (var i = range.x; i < range.y; i++) {
         ht_insert(&head, &tail, composite_fragment_at(i).row);
     }

@@ -32,35 +32,37 @@ fn mlab_q16(x: u32, y: u32) -> u32 {
     return (x * y + 32768u) >> 16u;
 }
 
+// The polynomial c[0] + x (c[1] + x (c[2] + .. x c[7])) in Horner's steps from c[7] down, each
+// product the rounded Q16 one; the steps are written out (no loop). A zero leading coefficient
+// changes nothing (mlab_q16(0, x) = 0): a shorter table is padded with zeros. The caller bounds
+// s * x + 32768 < 2^32 for every partial sum s.
+fn ht_horner(c: array<u32, 8>, x: u32) -> u32 {
+    var s = c[7];
+    s = c[6] + mlab_q16(s, x);
+    s = c[5] + mlab_q16(s, x);
+    s = c[4] + mlab_q16(s, x);
+    s = c[3] + mlab_q16(s, x);
+    s = c[2] + mlab_q16(s, x);
+    s = c[1] + mlab_q16(s, x);
+    return c[0] + mlab_q16(s, x);
+}
+
 // The tail's (T, g) in Q16 (65536 = 1) from its alpha sum and count (each at most 65535, as the
 // tails' fields are): T ~ (1 - m)^n and g ~ (1 - T) / (n m), m = S_a / (255 n). The kernel's
 // resolve::int::tail, step for step; the constant tables H, EXP, EB, PSI of docs/layout.md
-// appear in the Horner steps from the highest coefficient down.
+// are the coefficients of ht_horner, lowest first.
 fn ht_tail_resolve(alpha: u32, count: u32) -> vec2<u32> {
     let n = max(count, 1u);
     let m = (257u * alpha) / n; // 257 S_a <= 16,842,495 < 2^24: exact
     let series = m <= 16384u; // route A: m <= 1/4, T = e^-u
     let mm = min(m, 16384u);
-    // h(m) = -ln(1 - m) / m in units of 1/65793 (H[7] .. H[0]); h <= 75,710: h * mm < 2^31.
-    var h = 8224u;
-    h = 9399u + mlab_q16(h, mm);
-    h = 10966u + mlab_q16(h, mm);
-    h = 13159u + mlab_q16(h, mm);
-    h = 16448u + mlab_q16(h, mm);
-    h = 21931u + mlab_q16(h, mm);
-    h = 32897u + mlab_q16(h, mm);
-    h = 65793u + mlab_q16(h, mm);
+    // h(m) = -ln(1 - m) / m in units of 1/65793 (H); h <= 75,710: h * mm < 2^31.
+    let h = ht_horner(array<u32, 8>(65793u, 32897u, 21931u, 16448u, 13159u, 10966u, 9399u, 8224u), mm);
     let u = (min(alpha, 4095u) * h + 128u) >> 8u; // optical depth, Q16; 4095 h < 2^29
     let j = u >> 15u; // floor(2 u)
     let y = 32768u - (u & 32767u); // 1/2 - r, in (0, 1/2]
-    // e^(-r) (EXP[6] .. EXP[0]); e_r <= 65537, y <= 32768: products < 2^32.
-    var e_r = 55u;
-    e_r = 331u + mlab_q16(e_r, y);
-    e_r = 1656u + mlab_q16(e_r, y);
-    e_r = 6625u + mlab_q16(e_r, y);
-    e_r = 19875u + mlab_q16(e_r, y);
-    e_r = 39750u + mlab_q16(e_r, y);
-    e_r = 39750u + mlab_q16(e_r, y);
+    // e^(-r) (EXP); e_r <= 65537, y <= 32768: products < 2^32.
+    let e_r = ht_horner(array<u32, 8>(39750u, 39750u, 19875u, 6625u, 1656u, 331u, 55u, 0u), y);
     let zero = select(n >= 64u, u >= 786432u, series); // A: u >= 12; B: (3/4)^64
     let bits = select(select(n, j, series), 0u, zero); // at most 6 bits when not zero
     // Route A: e^(-r) times EB[i] = e^(-2^i / 2) for each set bit i of j; route B: x^n by the
@@ -80,15 +82,9 @@ fn ht_tail_resolve(alpha: u32, count: u32) -> vec2<u32> {
     b = mlab_q16(b, b);
     p = select(p, mlab_q16(p, select(b, 0u, series)), (bits & 32u) != 0u);
     let t = select(min(p, 65536u), 0u, zero);
-    // psi(u) = (e^u - 1) / u (PSI[5] .. PSI[0]) on min(u, 32767); psi <= 85,028 (the maximum over
-    // every input, as h <= 75,710 and e_r <= 65,537 are): psi * 32767 < 2^32.
-    let uu = min(u, 32767u);
-    var psi = 91u;
-    psi = 546u + mlab_q16(psi, uu);
-    psi = 2731u + mlab_q16(psi, uu);
-    psi = 10923u + mlab_q16(psi, uu);
-    psi = 32768u + mlab_q16(psi, uu);
-    psi = 65536u + mlab_q16(psi, uu);
+    // psi(u) = (e^u - 1) / u (PSI) on min(u, 32767); psi <= 85,028 (the maximum over every
+    // input, as h <= 75,710 and e_r <= 65,537 are): psi * 32767 < 2^32.
+    let psi = ht_horner(array<u32, 8>(65536u, 32768u, 10923u, 2731u, 546u, 91u, 0u, 0u), min(u, 32767u));
     let phi = ((t >> 1u) * psi + 16384u) >> 15u; // (1 - e^-u) / u; 32768 * 85,028 < 2^32
     // g = h(m) phi(u) (route A, u < 1/2; (h - 65793) phi < 2^30), else (1 - T) / s (< 2^24).
     let g_s = phi + (((((h - 65793u) * phi + 128u) >> 8u) * 255u + 32768u) >> 16u);
