@@ -19,6 +19,10 @@ driver() { # bench id -> driver symbol
         resolve_rgba16f/*) echo batch::resolve_f16 ;;
         client_mesh/validate_only) echo batch::validate_only ;;
         client_mesh/*) echo "batch::client_${id#*/}" ;;
+        # The MLAB and HT drivers over a DynFramebuffer are one function (the same type):
+        # the linker keeps one symbol, the HT one.
+        */mlab_per_pixel_dyn/*) echo batch::ht_per_pixel_dyn ;;
+        */mlab_batcher_dyn/*) echo batch::ht_batcher_dyn ;;
         *) local n=${id#*/}; echo "batch::${n%%/*}" ;;
       esac ;;
     kernel)
