@@ -59,6 +59,7 @@
 //! # Ok::<(), mlab::Error>(())
 //! ```
 
+use crate::arith::{ArithKind, Arithmetic};
 use crate::fragment::Fragment;
 use crate::framebuffer::{Dims, Framebuffer, FramebufferError, SpanRows};
 use crate::lanes::{FragmentLanes, LANES, LANES_U32};
@@ -127,9 +128,9 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     /// Push a fragment for pixel `(x, y)`, quantized (when its span is flushed) by the
     /// framebuffer's arithmetic. [`FramebufferError::OutOfBounds`] (and nothing pushed) if
     /// the pixel is outside.
-    // Always, as the flush is never: the push in the caller's loop, the flush a call per
-    // span. Left to LLVM, a `DynFramebuffer`'s push became a call per fragment (1.25x the
-    // instructions), or the Paper batcher's loop 1.12x (callgrind x86-64-v3).
+    // Always: the push in the caller's loop (the flush inlined into it, or a call per span,
+    // see `flush_inline`). Left to LLVM, a `DynFramebuffer`'s push became a call per fragment
+    // (1.25x the instructions), or the Paper batcher's loop 1.12x (callgrind x86-64-v3).
     #[inline(always)]
     pub fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
         if !F::SPAN_INSERTS_PAY {
@@ -178,7 +179,11 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         let mask = self.slots[s].mask;
         let key = (y as u64) << 32 | sx as u64;
         if mask != 0 && (self.keys[s] != key || mask & bit != 0) {
-            Self::flush_slot(self.fb, self.dims, self.keys[s], &mut self.slots[s])?;
+            if F::MERGES && matches!(<F::Arith as Arithmetic>::KIND, ArithKind::Paper) {
+                Self::flush_slot(self.fb, self.dims, self.keys[s], &mut self.slots[s])?;
+            } else {
+                Self::flush_inline(self.fb, self.dims, self.keys[s], &mut self.slots[s])?;
+            }
             self.span_inserts += 1;
         }
         self.keys[s] = key;
@@ -200,12 +205,20 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     }
 
     /// Quantize and insert the pending span of the key `key` (its pixels checked when
-    /// pushed: no second check), and mark it empty (a call per span, see
-    /// [`insert`](Self::insert)). The key crosses the call, not its `SpanAt`: a framebuffer
-    /// that does not read the stored span index (another crate's) then does not compute it
-    /// (`batcher_alone` 0.987x the instructions).
+    /// pushed: no second check), and mark it empty: a call per span (see
+    /// [`flush_inline`](Self::flush_inline) for where).
     #[inline(never)]
     fn flush_slot(fb: &mut F, dims: Dims, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
+        Self::flush_inline(fb, dims, key, slot)
+    }
+
+    /// [`flush_slot`](Self::flush_slot) inlined into the push: everywhere but the `Paper`
+    /// MLAB framebuffers, whose merge inlined there made the push loop 1.14x the
+    /// instructions (`client_mesh/mlab4_paper_batcher`, callgrind x86-64-v3). Through the call
+    /// the others ran up to 1.09x the time and 1.04x the instructions (`batcher_alone`, the
+    /// HT span batcher; `benches/compare.sh`, `docs/performance.md`).
+    #[inline(always)]
+    fn flush_inline(fb: &mut F, dims: Dims, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
         let at = dims.span_at_key(key);
         let fragments = slot.mask & !slot.rows;
         let first = fb.pixel_id(at.x, at.y);

@@ -133,12 +133,18 @@ impl Output for [f16; 4] {
             .map(to_rgba16f)
     }
 
-    /// The 32 conversions go through a call of their own: inlined into the whole-span loop,
-    /// they ran 6-7 % more instructions for large stored spans (HT K = 4, MLAB M = 8), and
-    /// 8-22 % more for every other size and arrangement (callgrind x86-64-v3).
+    /// Large stored spans (5 rows or more) convert through a call of their own: inlined
+    /// into their whole-span loop, the 32 conversions ran 6-7 % more instructions. Every
+    /// other size and pixel-major inline them: through the call they ran 4-17 % longer
+    /// (x86-64-v3, `benches/compare.sh`) with 4-8 % fewer instructions.
     #[inline(always)]
     fn unit<P: Pixel, L: Arrangement>(unit: &[Row], bg: Background) -> [[f16; 4]; LANES] {
-        rgba16f_lanes(&P::resolve_f32::<L>(unit), bg)
+        let r = P::resolve_f32::<L>(unit);
+        if L::SPANS && P::ROWS >= 5 {
+            rgba16f_lanes(&r, bg)
+        } else {
+            r.pixels(bg).map(to_rgba16f)
+        }
     }
 
     fn clear<P: Pixel>(bg: Background) -> [[f16; 4]; LANES] {
