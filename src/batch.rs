@@ -89,7 +89,7 @@ struct Slot {
 /// it once per frame and band, not per primitive), no allocation. Fragments are kept as
 /// f32 until their span is flushed, then validated and quantized 8 at a time
 /// ([`FragmentLanes::quantize_with`], byte-identical to
-/// [`Arithmetic::quantize`](crate::Arithmetic::quantize) per fragment).
+/// [`Arithmetic::quantize`] per fragment).
 #[derive(Debug)]
 pub struct SpanBatcher<'f, F: Framebuffer> {
     fb: &'f mut F,
