@@ -121,9 +121,9 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
         rows.get(first * n..(first + d.lanes_inside(x)) * n)
     }
 
-    /// A span insert at `at` (checked before; its `x` any column): `f` on each unit of
-    /// storage it touches (`F::insert`), with the lanes and the mask as they lie there. In spans, a span
-    /// at `x` not a multiple of 8 touches two stored spans: lane `i` lands on lane
+    /// A span insert at `at` (checked before; its `x` any column): `F::insert` on each unit
+    /// of storage it touches, with the lanes and the mask as they lie there. In spans, a
+    /// span at `x` not a multiple of 8 touches two stored spans: lane `i` lands on lane
     /// `(i + x % 8) % 8`, of the first if `i + x % 8 < 8`, of the next one otherwise.
     #[doc(hidden)]
     #[inline(always)]

@@ -133,10 +133,11 @@ impl Output for [f16; 4] {
             .map(to_rgba16f)
     }
 
-    /// Large stored spans (5 rows or more) convert through a call of their own: inlined
-    /// into their whole-span loop, the 32 conversions ran 6-7 % more instructions. Every
-    /// other size and pixel-major inline them: through the call they ran 4-17 % longer
-    /// (x86-64-v3, `benches/compare.sh`) with 4-8 % fewer instructions.
+    /// Large stored spans (5 rows or more) convert through a call of their own, as before
+    /// issue 32 (inlined there, the 32 conversions ran 6-7 % more instructions then). Every
+    /// other size and pixel-major inline them: through the call they ran 4-17 % longer than
+    /// before issue 32 with 2-8 % fewer instructions, inlined 0.80-0.98x the time (x86-64-v3,
+    /// `benches/compare.sh`, `benches/callgrind_compare.sh`).
     #[inline(always)]
     fn unit<P: Pixel, L: Arrangement>(unit: &[Row], bg: Background) -> [[f16; 4]; LANES] {
         let r = P::resolve_f32::<L>(unit);
