@@ -117,8 +117,7 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
             return unit(rows, d.span_index(span, y)?, LANES * n);
         }
         let x = span.checked_mul(LANES_U32).filter(|&x| x < d.width && y < d.height)?;
-        let first = d.index_unchecked(x, y);
-        rows.get(first * n..(first + d.lanes_inside(x)) * n)
+        rows.get(pixels_from(d, n, x, y))
     }
 
     /// A span insert at `at` (checked before; its `x` any column): `F::insert` on each unit
@@ -133,8 +132,7 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
     )]
     fn insert_span<F: InsertUnit>(rows: &mut [Row], d: Dims, n: usize, at: SpanAt, span: SpanRows<'_>) {
         if !Self::SPANS {
-            let first = d.index_unchecked(at.x, at.y);
-            if let Some(px) = rows.get_mut(first * n..(first + d.lanes_inside(at.x)) * n) {
+            if let Some(px) = rows.get_mut(pixels_from(d, n, at.x, at.y)) {
                 F::insert(px, span);
             }
             return;
@@ -292,6 +290,14 @@ impl Arrangement for PixelMajor {
 
 impl Arrangement for Spans {
     const SPANS: bool = true;
+}
+
+/// The pixel-major rows of the 1 to 8 pixels of a span from `(x, y)` (checked before), `n`
+/// per pixel: the unit of that span.
+#[inline(always)]
+fn pixels_from(d: Dims, n: usize, x: u32, y: u32) -> core::ops::Range<usize> {
+    let first = d.index_unchecked(x, y);
+    first * n..(first + d.lanes_inside(x)) * n
 }
 
 /// Unit `i` of `n` rows.
