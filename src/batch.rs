@@ -59,7 +59,6 @@
 //! # Ok::<(), mlab::Error>(())
 //! ```
 
-use crate::arith::{ArithKind, Arithmetic};
 use crate::fragment::Fragment;
 use crate::framebuffer::{Dims, Framebuffer, FramebufferError, SpanRows};
 use crate::lanes::{FragmentLanes, LANES, LANES_U32};
@@ -89,7 +88,7 @@ struct Slot {
 /// it once per frame and band, not per primitive), no allocation. Fragments are kept as
 /// f32 until their span is flushed, then validated and quantized 8 at a time
 /// ([`FragmentLanes::quantize_with`], byte-identical to
-/// [`Arithmetic::quantize`] per fragment).
+/// [`Arithmetic::quantize`](crate::Arithmetic::quantize) per fragment).
 #[derive(Debug)]
 pub struct SpanBatcher<'f, F: Framebuffer> {
     fb: &'f mut F,
@@ -128,8 +127,7 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     /// Push a fragment for pixel `(x, y)`, quantized (when its span is flushed) by the
     /// framebuffer's arithmetic. [`FramebufferError::OutOfBounds`] (and nothing pushed) if
     /// the pixel is outside.
-    // Always: the push in the caller's loop (the flush inlined into it, or a call per span,
-    // see `flush_inline`). Left to LLVM, a `DynFramebuffer`'s push became a call per fragment
+    // Always: the push in the caller's loop, the flush inlined into it (`flush_inline`). Left to LLVM, a `DynFramebuffer`'s push became a call per fragment
     // (1.25x the instructions), or the Paper batcher's loop 1.12x (callgrind x86-64-v3).
     #[inline(always)]
     pub fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
@@ -178,12 +176,12 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
         let s = ((sx & ((1 << COL_BITS) - 1)) | (y & ((1 << LINE_BITS) - 1)) << COL_BITS) as usize;
         let mask = self.slots[s].mask;
         let key = (y as u64) << 32 | sx as u64;
-        if mask != 0 && (self.keys[s] != key || mask & bit != 0) {
-            if F::MERGES && matches!(<F::Arith as Arithmetic>::KIND, ArithKind::Paper) {
-                Self::flush_slot(self.fb, self.dims, self.keys[s], &mut self.slots[s])?;
-            } else {
-                Self::flush_inline(self.fb, self.dims, self.keys[s], &mut self.slots[s])?;
-            }
+        // The lane's bit tested before the key: in the other order LLVM's register allocator
+        // rotated nine registers and back on the hot path of the Paper MLAB batcher (18 moves
+        // per fragment: `client_mesh/mlab4_paper_batcher` 1.14x the instructions of 8f8d933;
+        // in this order 1.00x, callgrind x86-64-v3).
+        if mask != 0 && (mask & bit != 0 || self.keys[s] != key) {
+            Self::flush_inline(self.fb, self.dims, self.keys[s], &mut self.slots[s])?;
             self.span_inserts += 1;
         }
         self.keys[s] = key;
@@ -205,18 +203,15 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     }
 
     /// Quantize and insert the pending span of the key `key` (its pixels checked when
-    /// pushed: no second check), and mark it empty: a call per span (see
-    /// [`flush_inline`](Self::flush_inline) for where).
+    /// pushed: no second check), and mark it empty: a call per span, for [`flush`](Self::flush).
     #[inline(never)]
     fn flush_slot(fb: &mut F, dims: Dims, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
         Self::flush_inline(fb, dims, key, slot)
     }
 
-    /// [`flush_slot`](Self::flush_slot) inlined into the push: everywhere but the `Paper`
-    /// MLAB framebuffers, whose merge inlined there made the push loop 1.14x the
-    /// instructions (`client_mesh/mlab4_paper_batcher`, callgrind x86-64-v3). Through the call
-    /// the others ran up to 1.09x the time and 1.04x the instructions (`batcher_alone`, the
-    /// HT span batcher; `benches/compare.sh`, `docs/performance.md`).
+    /// [`flush_slot`](Self::flush_slot) inlined into the push: through the call the batchers
+    /// ran up to 1.09x the time and 1.04x the instructions (`batcher_alone`, the HT span
+    /// batcher; `benches/compare.sh`, `docs/performance.md`).
     #[inline(always)]
     fn flush_inline(fb: &mut F, dims: Dims, key: u64, slot: &mut Slot) -> Result<(), FramebufferError> {
         let at = dims.span_at_key(key);
