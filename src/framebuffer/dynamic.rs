@@ -250,20 +250,12 @@ pub struct DynPixel<A: Arithmetic = Unbiased> {
 impl<A: Arithmetic> DynPixel<A> {
     /// Pixel `(x, y)` of a grid of the kind `P`.
     fn read<P: Pixel<Arith = A>>(grid: &Grid<'_, P, Spans>, x: u32, y: u32) -> Result<Self, FramebufferError> {
-        let mut all = [Row::EMPTY; 9];
-        P::to_slots(grid.pixel(x, y)?, |j, r| {
-            if let Some(s) = all.get_mut(j) {
-                *s = r;
-            }
+        let (Layers::Mlab(n) | Layers::Hybrid(n)) = P::LAYERS;
+        let (mut rows, mut tail) = ([Row::EMPTY; 8], None);
+        P::to_slots(grid.pixel(x, y)?, |j, r| match rows.get_mut(j).filter(|_| j < n) {
+            Some(s) => *s = r,
+            None => tail = Some(A::Tail::from_bytes(r.to_bytes())),
         });
-        let (n, tail) = match P::LAYERS {
-            Layers::Mlab(m) => (m, None),
-            Layers::Hybrid(k) => (k, all.get(k).map(|t| A::Tail::from_bytes(t.to_bytes()))),
-        };
-        let mut rows = [Row::EMPTY; 8];
-        for (r, s) in rows.iter_mut().zip(all.iter().take(n)) {
-            *r = *s;
-        }
         Ok(DynPixel {
             layers: P::LAYERS,
             rows,

@@ -93,9 +93,9 @@ use w512::{Mask8 as HtMask8, Rows8 as HtRows8};
 
 pub use backend::BACKEND;
 pub use quantize::{FragmentLanes, QuantizedLanes};
+pub(crate) use resolve_int::ht::{hybrid_resolve_parts2_rgba8, hybrid_resolve_parts4_rgba8};
 pub(crate) use resolve_int::{
-    PixelCell, hybrid_resolve_head_rgba8, hybrid_resolve_parts_rgba8, hybrid_resolve_parts2_rgba8,
-    hybrid_resolve_parts4_rgba8, mlab_resolve_line_rgba8, mlab_resolve_rgba8,
+    PixelCell, hybrid_resolve_head_rgba8, hybrid_resolve_parts_rgba8, mlab_resolve_line_rgba8, mlab_resolve_rgba8,
 };
 
 /// Pixels per lane group.

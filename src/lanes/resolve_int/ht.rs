@@ -7,7 +7,7 @@
 
 use crate::lanes::LANES;
 use crate::lanes::layout::{layer_words, tail_fields, unpermute};
-use crate::resolve::int;
+use crate::resolve::int::{self, IntBackground};
 use crate::row::Row;
 use crate::tail::TailFormat;
 use bytemuck::cast;
@@ -233,22 +233,6 @@ fn tail_parts(alpha: u32x8, count: u32x8) -> (u32x8, u32x8, u16x8) {
     tail_end(tail_mid8(inputs), alpha_f)
 }
 
-/// [`tail_parts`] of two spans' tails at once.
-#[inline(always)]
-fn tail_parts2(alpha: [u32x8; 2], count: [u32x8; 2]) -> [(u32x8, u32x8, u16x8); 2] {
-    // (Written out: `array::map` and `from_fn` here were calls, with copies, not inlined.)
-    let (a, fa) = tail_inputs(alpha[0], count[0]);
-    let (b, fb) = tail_inputs(alpha[1], count[1]);
-    let join = |i: usize| cast::<[u16x8; 2], u16x16>([a[i], b[i]]);
-    let [m0, m1, m2, m3, m4, m5] = tail_mid16([join(0), join(1), join(2), join(3)]);
-    let split = cast::<u16x16, [u16x8; 2]>;
-    let [m0, m1, m2, m3, m4, m5] = [split(m0), split(m1), split(m2), split(m3), split(m4), split(m5)];
-    [
-        tail_end([m0[0], m1[0], m2[0], m3[0], m4[0], m5[0]], fa),
-        tail_end([m0[1], m1[1], m2[1], m3[1], m4[1], m5[1]], fb),
-    ]
-}
-
 /// Whether `pmulhrsw` is native (SSSE3 and later): the head's factors and visibility are
 /// then kept as they are, else doubled (`q15` from `pmulhuw`: the SSE2 form of the MLAB
 /// integer resolve, `docs/layout.md`).
@@ -370,25 +354,6 @@ pub(in crate::lanes) fn tails_empty<T: TailFormat>(tails: &[T; LANES]) -> bool {
     cast::<[T; LANES], [u64; LANES]>(*tails).iter().fold(0, |a, &t| a | t) == 0
 }
 
-/// [`tail_parts`] of four spans' tails at once (with AVX2 two 256-bit chains).
-#[inline(always)]
-fn tail_parts4(alpha: [u32x8; 4], count: [u32x8; 4]) -> [(u32x8, u32x8, u16x8); 4] {
-    let (a, fa) = tail_inputs(alpha[0], count[0]);
-    let (b, fb) = tail_inputs(alpha[1], count[1]);
-    let (c, fc) = tail_inputs(alpha[2], count[2]);
-    let (d, fd) = tail_inputs(alpha[3], count[3]);
-    let join = |i: usize| cast::<[u16x8; 4], u16x32>([a[i], b[i], c[i], d[i]]);
-    let [m0, m1, m2, m3, m4, m5] = tail_mid32([join(0), join(1), join(2), join(3)]);
-    let split = cast::<u16x32, [u16x8; 4]>;
-    let [m0, m1, m2, m3, m4, m5] = [split(m0), split(m1), split(m2), split(m3), split(m4), split(m5)];
-    [
-        tail_end([m0[0], m1[0], m2[0], m3[0], m4[0], m5[0]], fa),
-        tail_end([m0[1], m1[1], m2[1], m3[1], m4[1], m5[1]], fb),
-        tail_end([m0[2], m1[2], m2[2], m3[2], m4[2], m5[2]], fc),
-        tail_end([m0[3], m1[3], m2[3], m3[3], m4[3], m5[3]], fd),
-    ]
-}
-
 /// The integer RGBA8 resolve of 8 HT pixels (head layers, tails), over the opaque background
 /// `bg` (`int::background_channel` values) when `OPAQUE`, else premultiplied; the head alone
 /// where every tail is empty.
@@ -416,39 +381,44 @@ pub(in crate::lanes) fn resolve_head<const K: usize, const OPAQUE: bool>(
     pixels::<OPAQUE>(head_lanes(head), bg)
 }
 
-/// [`resolve`] of four spans at once (their tails' long dependency chains interleaved).
-#[inline(always)]
-pub(in crate::lanes) fn resolve4<T: TailFormat, const K: usize, const OPAQUE: bool>(
-    spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
-    bg: [u32; 3],
-) -> [[[u8; 4]; LANES]; 4] {
-    let (s0, a0, n0) = tail_fields(spans[0].1);
-    let (s1, a1, n1) = tail_fields(spans[1].1);
-    let (s2, a2, n2) = tail_fields(spans[2].1);
-    let (s3, a3, n3) = tail_fields(spans[3].1);
-    let [(_, g0, t0), (_, g1, t1), (_, g2, t2), (_, g3, t3)] = tail_parts4([a0, a1, a2, a3], [n0, n1, n2, n3]);
-    [
-        pixels::<OPAQUE>(add_tail(head_lanes(spans[0].0), s0, (g0, t0)), bg),
-        pixels::<OPAQUE>(add_tail(head_lanes(spans[1].0), s1, (g1, t1)), bg),
-        pixels::<OPAQUE>(add_tail(head_lanes(spans[2].0), s2, (g2, t2)), bg),
-        pixels::<OPAQUE>(add_tail(head_lanes(spans[3].0), s3, (g3, t3)), bg),
-    ]
+/// [`tail_parts`] of `$n` spans' tails at once (`$mid`: their dependency chains overlap; four
+/// spans are two 256-bit chains with AVX2), and [`resolve`] of `$n` spans with it, with its
+/// background's forms (`$rgba8`, as `super::hybrid_resolve_parts_rgba8`). Written out per
+/// span: `array::map` and `from_fn` here were calls, with copies, not inlined.
+macro_rules! resolve_spans {
+    ($parts:ident, $resolve:ident, $rgba8:ident, $mid:ident, $w:ty, $n:literal: $($i:literal)*) => {
+        #[inline(always)]
+        fn $parts(alpha: [u32x8; $n], count: [u32x8; $n]) -> [(u32x8, u32x8, u16x8); $n] {
+            let inputs = [$(tail_inputs(alpha[$i], count[$i])),*];
+            let join = |j: usize| cast::<[u16x8; $n], $w>([$(inputs[$i].0[j]),*]);
+            let m = $mid([join(0), join(1), join(2), join(3)]);
+            let split = |j: usize| cast::<$w, [u16x8; $n]>(m[j]);
+            let m = [split(0), split(1), split(2), split(3), split(4), split(5)];
+            [$(tail_end([m[0][$i], m[1][$i], m[2][$i], m[3][$i], m[4][$i], m[5][$i]], inputs[$i].1)),*]
+        }
+
+        #[inline(always)]
+        pub(in crate::lanes) fn $resolve<T: TailFormat, const K: usize, const OPAQUE: bool>(
+            spans: [(&[[Row; LANES]; K], &[T; LANES]); $n],
+            bg: [u32; 3],
+        ) -> [[[u8; 4]; LANES]; $n] {
+            let fields = [$(tail_fields(spans[$i].1)),*];
+            let tails = $parts([$(fields[$i].1),*], [$(fields[$i].2),*]);
+            [$(pixels::<OPAQUE>(add_tail(head_lanes(spans[$i].0), fields[$i].0, (tails[$i].1, tails[$i].2)), bg)),*]
+        }
+
+        #[inline(always)]
+        pub(crate) fn $rgba8<T: TailFormat, const K: usize>(
+            spans: [(&[[Row; LANES]; K], &[T; LANES]); $n],
+            background: IntBackground,
+        ) -> [[[u8; 4]; LANES]; $n] {
+            by_background!(background, |O, bg| $resolve::<T, K, O>(spans, bg))
+        }
+    };
 }
 
-/// [`resolve`] of two spans at once (their tails' long dependency chains interleaved).
-#[inline(always)]
-pub(in crate::lanes) fn resolve2<T: TailFormat, const K: usize, const OPAQUE: bool>(
-    spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
-    bg: [u32; 3],
-) -> [[[u8; 4]; LANES]; 2] {
-    let (s0, a0, n0) = tail_fields(spans[0].1);
-    let (s1, a1, n1) = tail_fields(spans[1].1);
-    let [(_, g0, t0), (_, g1, t1)] = tail_parts2([a0, a1], [n0, n1]);
-    [
-        pixels::<OPAQUE>(add_tail(head_lanes(spans[0].0), s0, (g0, t0)), bg),
-        pixels::<OPAQUE>(add_tail(head_lanes(spans[1].0), s1, (g1, t1)), bg),
-    ]
-}
+resolve_spans!(tail_parts2, resolve2, hybrid_resolve_parts2_rgba8, tail_mid16, u16x16, 2: 0 1);
+resolve_spans!(tail_parts4, resolve4, hybrid_resolve_parts4_rgba8, tail_mid32, u16x32, 4: 0 1 2 3);
 
 #[cfg(test)]
 #[expect(

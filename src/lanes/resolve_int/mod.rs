@@ -5,6 +5,25 @@
 //! without SSSE3 (the x86-64 baseline, SSE2), where `wide` would emulate those lane by lane
 //! (195 instructions per pixel at M = 4) and `sse2.rs` has a form of its own.
 
+/// `$e` with the const `$opaque` true and `$bg` the background's channels for an opaque
+/// background, else with `$opaque` false and `$bg` zero: the background's case chosen once,
+/// outside the loops of the resolve it picks.
+macro_rules! by_background {
+    ($background:expr, |$opaque:ident, $bg:ident| $e:expr) => {
+        match $background {
+            Some($bg) => {
+                const $opaque: bool = true;
+                $e
+            }
+            None => {
+                const $opaque: bool = false;
+                let $bg = [0; 3];
+                $e
+            }
+        }
+    };
+}
+
 pub(super) mod ht;
 #[cfg(all(any(target_arch = "x86", target_arch = "x86_64"), not(target_feature = "ssse3")))]
 mod sse2;
@@ -44,25 +63,6 @@ impl<const M: usize> Cell<M> for PixelCell<'_, M> {
     fn layer(&self, j: usize) -> [Row; LANES] {
         core::array::from_fn(|p| self.0[p].get(j).copied().unwrap_or(Row::EMPTY))
     }
-}
-
-/// `$e` with the const `$opaque` true and `$bg` the background's channels for an opaque
-/// background, else with `$opaque` false and `$bg` zero: the background's case chosen once,
-/// outside the loops of the resolve it picks.
-macro_rules! by_background {
-    ($background:expr, |$opaque:ident, $bg:ident| $e:expr) => {
-        match $background {
-            Some($bg) => {
-                const $opaque: bool = true;
-                $e
-            }
-            None => {
-                const $opaque: bool = false;
-                let $bg = [0; 3];
-                $e
-            }
-        }
-    };
 }
 
 /// The integer RGBA8 resolve of 8 MLAB pixels (`docs/layout.md`, "Integer resolve"; what
@@ -106,25 +106,6 @@ pub(crate) fn hybrid_resolve_head_rgba8<const K: usize>(
     background: IntBackground,
 ) -> [[u8; 4]; LANES] {
     by_background!(background, |O, bg| ht::resolve_head::<K, O>(head, bg))
-}
-
-/// [`hybrid_resolve_parts_rgba8`] of two spans at once: the same bytes, the two spans' tail
-/// dependency chains interleaved (HT's whole-line RGBA8 loop).
-#[inline(always)]
-pub(crate) fn hybrid_resolve_parts2_rgba8<T: TailFormat, const K: usize>(
-    spans: [(&[[Row; LANES]; K], &[T; LANES]); 2],
-    background: IntBackground,
-) -> [[[u8; 4]; LANES]; 2] {
-    by_background!(background, |O, bg| ht::resolve2::<T, K, O>(spans, bg))
-}
-
-/// [`hybrid_resolve_parts_rgba8`] of four spans at once (as [`hybrid_resolve_parts2_rgba8`]).
-#[inline(always)]
-pub(crate) fn hybrid_resolve_parts4_rgba8<T: TailFormat, const K: usize>(
-    spans: [(&[[Row; LANES]; K], &[T; LANES]); 4],
-    background: IntBackground,
-) -> [[[u8; 4]; LANES]; 4] {
-    by_background!(background, |O, bg| ht::resolve4::<T, K, O>(spans, bg))
 }
 
 #[cfg(test)]
