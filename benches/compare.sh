@@ -9,7 +9,8 @@
 #   RUSTFLAGS="-C target-cpu=x86-64-v3" benches/compare.sh main~1 4 '^insert_random/mlab_lanes'
 # BENCHES: "kernel batch" by default. Each RUSTFLAGS gets its own target directories (wide
 # picks its backend at compile time). Read /proc/loadavg before trusting a figure: another
-# busy process on a 2-core machine moves these by 10-50 %.
+# busy process on a 2-core machine moves these by 10-50 %. Loop placement alone moves one by up
+# to 25 %: add `-C llvm-args=-align-loops=64` to RUSTFLAGS for a second, placement-free run.
 set -euo pipefail
 repo=$(cd "$(dirname "$0")/.." && pwd)
 base=${1:?usage: benches/compare.sh BASE [ROUNDS] [FILTER] [BENCHES]}
