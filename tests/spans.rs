@@ -183,6 +183,8 @@ proptest! {
         check::<MlabKind<4, Unbiased>>(w, h, &ops)?;
         check::<HtKind<1, Unbiased>>(w, h, &ops)?;
         check::<HtKind<3, Unbiased>>(w, h, &ops)?;
+        // 9 slots a pixel: the pixel-major resolves gather into the resolve itself without AVX2.
+        check::<HtKind<8, Unbiased>>(w, h, &ops)?;
     }
 
     /// Inserting through bands (one per thread) gives the same storage as inserting into the whole.
