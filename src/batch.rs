@@ -127,8 +127,9 @@ impl<'f, F: Framebuffer> SpanBatcher<'f, F> {
     /// Push a fragment for pixel `(x, y)`, quantized (when its span is flushed) by the
     /// framebuffer's arithmetic. [`FramebufferError::OutOfBounds`] (and nothing pushed) if
     /// the pixel is outside.
-    // Always: the push in the caller's loop, the flush inlined into it (`flush_inline`). Left to LLVM, a `DynFramebuffer`'s push became a call per fragment
-    // (1.25x the instructions), or the Paper batcher's loop 1.12x (callgrind x86-64-v3).
+    // Always: the push in the caller's loop, the flush inlined into it (`flush_inline`).
+    // Left to LLVM, a `DynFramebuffer`'s push became a call per fragment (1.25x the
+    // instructions), or the Paper batcher's loop 1.12x (callgrind x86-64-v3).
     #[inline(always)]
     pub fn insert(&mut self, x: u32, y: u32, fragment: &Fragment) -> Result<(), FramebufferError> {
         if !F::SPAN_INSERTS_PAY {
