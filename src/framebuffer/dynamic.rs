@@ -297,7 +297,7 @@ impl<'a, A: Arithmetic> Framebuffer for DynFramebuffer<'a, A> {
         mut fn insert_span(x: u32, y: u32, rows: &[Row; LANES], mask: u8) -> Result<(), FramebufferError>;
         ref fn first_pixel() -> u32;
         mut fn insert_hashed(x: u32, y: u32, row: Row, h: u32) -> Result<(), FramebufferError>;
-        mut fn insert_span_hashed(x: u32, y: u32, rows: &[Row; LANES], hashes: &[u32; LANES], mask: u8) -> Result<(), FramebufferError>;
+        mut fn insert_span_rows(x: u32, y: u32, span: SpanRows<'_>) -> Result<(), FramebufferError>;
         ref fn resolve(x: u32, y: u32) -> Result<Resolved, FramebufferError>;
         ref fn resolve_span(span: u32, y: u32) -> Option<ResolvedLanes>;
         ref fn resolve_span_rgba8(span: u32, y: u32, bg: Background) -> [[u8; 4]; LANES];

@@ -251,18 +251,10 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     }
 
     #[inline(always)]
-    fn insert_span_hashed(
-        &mut self,
-        x: u32,
-        y: u32,
-        rows: &[Row; LANES],
-        hashes: &[u32; LANES],
-        mask: u8,
-    ) -> Result<(), FramebufferError> {
-        self.dims.check_span(x, y, mask)?;
-        if mask != 0 {
-            let (at, span) = (self.dims.span_at(x, y), SpanRows { rows, hashes, mask });
-            L::insert_span::<KindInsert<P, L>>(self.rows, self.dims, P::ROWS, at, span);
+    fn insert_span_rows(&mut self, x: u32, y: u32, span: SpanRows<'_>) -> Result<(), FramebufferError> {
+        self.dims.check_span(x, y, span.mask)?;
+        if span.mask != 0 {
+            L::insert_span::<KindInsert<P, L>>(self.rows, self.dims, P::ROWS, self.dims.span_at(x, y), span);
         }
         Ok(())
     }

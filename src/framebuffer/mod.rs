@@ -196,8 +196,8 @@ pub trait Framebuffer {
     }
 
     /// [`insert_span`](Self::insert_span) with each lane's merge seeded by `hashes[i]` (as
-    /// [`insert_hashed`](Self::insert_hashed)). This default, for a framebuffer of another
-    /// crate, is [`insert_span`](Self::insert_span).
+    /// [`insert_hashed`](Self::insert_hashed)). For a framebuffer of another crate this
+    /// default is [`insert_span`](Self::insert_span).
     #[inline(always)]
     fn insert_span_hashed(
         &mut self,
@@ -207,8 +207,17 @@ pub trait Framebuffer {
         hashes: &[u32; LANES],
         mask: u8,
     ) -> Result<(), FramebufferError> {
-        let _ = hashes;
-        self.insert_span(x, y, rows, mask)
+        self.insert_span_rows(x, y, SpanRows { rows, hashes, mask })
+    }
+
+    /// [`insert_span_hashed`](Self::insert_span_hashed) with its lanes as one value (what a
+    /// [`Grid`] overrides; no other crate can name a `SpanRows`). This default is
+    /// [`insert_span`](Self::insert_span).
+    #[doc(hidden)]
+    #[inline(always)]
+    #[allow(private_interfaces)]
+    fn insert_span_rows(&mut self, x: u32, y: u32, span: SpanRows<'_>) -> Result<(), FramebufferError> {
+        self.insert_span(x, y, span.rows, span.mask)
     }
 
     /// [`insert_span_hashed`](Self::insert_span_hashed) at an aligned span found (and

@@ -264,21 +264,15 @@ mod tests {
     /// Both inserts on 16 lanes against the 8-wide lanes (each its own stream of cases).
     #[test]
     fn inserts_match_the_8_wide_lanes() {
+        macro_rules! check {
+            ($rng:ident, $f:ident, $a:ty: $($n:literal)*) => { $($f::<$a, $n>($rng);)* };
+        }
         let rng = &mut Rng(0x9e37_79b9_7f4a_7c15);
-        check_mlab::<Unbiased, 1>(rng);
-        check_mlab::<Unbiased, 2>(rng);
-        check_mlab::<Unbiased, 3>(rng);
-        check_mlab::<Unbiased, 4>(rng);
-        check_mlab::<Unbiased, 8>(rng);
-        check_mlab::<Paper, 1>(rng);
-        check_mlab::<Paper, 4>(rng);
-        check_mlab::<Paper, 5>(rng);
+        check!(rng, check_mlab, Unbiased: 1 2 3 4 8);
+        check!(rng, check_mlab, Paper: 1 4 5);
         let rng = &mut Rng(0x2545_f491_4f6c_dd1d);
-        check_hybrid::<Tail, 1>(rng);
-        check_hybrid::<Tail, 3>(rng);
-        check_hybrid::<Tail, 7>(rng);
-        check_hybrid::<PaperTail, 1>(rng);
-        check_hybrid::<PaperTail, 3>(rng);
+        check!(rng, check_hybrid, Tail: 1 3 7);
+        check!(rng, check_hybrid, PaperTail: 1 3);
     }
 
     /// [`mul257_high`] against `(y * 257) >> 16` for every `y` it is specified for.
