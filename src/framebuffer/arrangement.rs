@@ -227,19 +227,6 @@ pub trait Arrangement: crate::sealed::Sealed + Copy + Debug + Default + Send + S
         if Self::SPANS {
             return split_span::<H, T>(unit).map_or_else(or, |(h, t)| f(h, t));
         }
-        // Without AVX2 and over 8 slots a pixel, the pair `gather` returns was copied once more
-        // before `f` (SSE2, HT K = 8 pixel-major resolves: 1.16x the instructions to f32, 1.08x
-        // to RGBA16F). Made here instead, at 8 slots or fewer the HT RGBA8 resolves ran up to
-        // 1.06x the instructions, and with AVX2 the RGBA16F and HT RGBA8 ones 1.09-1.22x.
-        if !cfg!(target_feature = "avx2")
-            && H + T > 8
-            && let Some(px) = unit.get(..LANES * (H + T))
-        {
-            let at = |lane: usize, slot: usize| px.get(lane * (H + T) + slot).copied().unwrap_or(fill);
-            let head = core::array::from_fn(|layer| core::array::from_fn(|lane| at(lane, layer)));
-            let tail = core::array::from_fn(|layer| core::array::from_fn(|lane| at(lane, H + layer)));
-            return f(&head, &tail);
-        }
         let (head, tail) = gather::<H, T>(unit, fill);
         f(&head, &tail)
     }

@@ -11,7 +11,7 @@ use super::arrangement::{Arrangement, InsertUnit, SpanRows};
 use super::dims::{Dims, SpanAt};
 use super::output::Output;
 use super::pixel::Pixel;
-use super::write::{write_lines, write_spans};
+use super::write::write_lines;
 use super::{Framebuffer, FramebufferError};
 use crate::lanes::{self, LANES, ResolvedLanes};
 use crate::mlab::row_hash;
@@ -280,14 +280,10 @@ impl<'a, P: Pixel, L: Arrangement> Framebuffer for Grid<'a, P, L> {
     }
 
     /// Whole spans from their line's rows (no per-span index maths or bounds checks), the
-    /// partial last spans through `span_as`; span by span where the kind's
-    /// pixel-major line loop does not pay ([`Pixel::PIXEL_MAJOR_LINE_LOOP`]).
+    /// partial last spans through `span_as`.
     fn resolve_as<O: Output>(&self, out: &mut [O], bg: Background) -> Result<(), FramebufferError> {
         let b = O::background(bg);
         let edge = |s, y| self.span_as::<O>(s, y, bg, b);
-        if !(L::SPANS || P::PIXEL_MAJOR_LINE_LOOP) {
-            return write_spans(self.dims, out, edge);
-        }
         let line_rows = L::line_rows(self.dims, P::ROWS).unwrap_or(0);
         let whole = |line: &[Row], o: &mut [[O; LANES]]| O::line::<P, L>(line, o, b);
         write_lines(self.dims, out, self.rows, line_rows, whole, edge)

@@ -5,7 +5,7 @@
 //! [`Spans`](super::Spans)) hands it, borrowed or gathered: no leaf asks which arrangement
 //! it runs on. The measured pixel-major cells are named as such: MLAB's resolve of 8 whole
 //! pixel-major pixels without the transpose, MLAB's one-lane insert with AVX, HT's
-//! [`PIXEL_MAJOR_LINE_LOOP`](Pixel::PIXEL_MAJOR_LINE_LOOP) and span-insert facts.
+//! span-insert facts.
 
 use core::fmt::Debug;
 use core::marker::PhantomData;
@@ -57,10 +57,6 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// inserts of quantized rows do not.
     #[doc(hidden)]
     const MERGES: bool;
-    /// Whether the pixel-major resolves walk whole spans in the line loop (see the HT
-    /// implementation for where they do not).
-    #[doc(hidden)]
-    const PIXEL_MAJOR_LINE_LOOP: bool = true;
 
     /// Resolve one pixel (Eq. 5, or head and tail).
     fn resolve(value: &Self::Value) -> Resolved;
@@ -345,9 +341,6 @@ impl<const K: usize, A: Arithmetic> Pixel for Ht<K, A> {
     const LAYERS: Layers = Layers::Hybrid(K);
     const PIXEL_MAJOR_SPAN_INSERTS_PAY: bool = false;
     const MERGES: bool = false;
-    /// Without AVX2 and above `K = 4` the resolve goes span by span: the whole-span loop took
-    /// 11 % longer there (`docs/performance.md`).
-    const PIXEL_MAJOR_LINE_LOOP: bool = K <= 4 || cfg!(target_feature = "avx2");
 
     fn resolve(value: &Self::Value) -> Resolved {
         hybrid::resolve(&value.0, value.1)
