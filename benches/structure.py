@@ -4,6 +4,7 @@
   python3 benches/structure.py cycles DIR        # module import cycles of a crate's src dir
   python3 benches/structure.py functions N DIR.. # functions longer than N lines (fn line to its brace)
   python3 benches/structure.py codelines DIR..   # code lines: not blank, not comments, not #[cfg(test)] modules
+  python3 benches/structure.py kinds DIR..       # those code lines split: use/mod items, attributes, the rest
 
 `cycles`: nodes are the crate's modules (files); an edge a -> b when a's non-test code names a
 path under b (`crate::`, `super::`, `self::` resolved; `use` groups expanded); edges between a
@@ -111,9 +112,39 @@ def codelines(roots):
             total += sum(1 for l in strip_tests(open(p).read()).split('\n') if l.strip() and not l.strip().startswith('//'))
     print(total)
 
+def kinds(roots):
+    c = {'files': 0, 'use/mod': 0, 'attributes': 0, 'other': 0}
+    for root in roots:
+        for p in rust_files(root):
+            c['files'] += 1
+            cont = None  # the kind of a statement or attribute that goes on to the next line
+            depth = 0
+            for l in strip_tests(open(p).read()).split('\n'):
+                t = l.strip()
+                if not t or t.startswith('//'):
+                    continue
+                if cont == 'use/mod':
+                    c[cont] += 1
+                    cont = None if t.endswith(';') else cont
+                elif cont == 'attributes':
+                    c[cont] += 1
+                    depth += t.count('[') + t.count('(') - t.count(']') - t.count(')')
+                    cont = cont if depth > 0 else None
+                elif re.match(r'(pub(\([^)]*\))? )?(use|mod) ', t) and (t.endswith(';') or (' use ' in ' ' + t and t.endswith('{'))):
+                    c['use/mod'] += 1
+                    cont = None if t.endswith(';') else 'use/mod'
+                elif t.startswith('#'):
+                    c['attributes'] += 1
+                    depth = t.count('[') + t.count('(') - t.count(']') - t.count(')')
+                    cont = 'attributes' if depth > 0 else None
+                else:
+                    c['other'] += 1
+    print(' '.join(f'{k} {v}' for k, v in c.items()))
+
 if __name__ == '__main__':
     cmd, args = sys.argv[1], sys.argv[2:]
     if cmd == 'cycles': sys.exit(1 if sum(cycles(a) for a in args) else 0)
     elif cmd == 'functions': functions(int(args[0]), args[1:])
     elif cmd == 'codelines': codelines(args)
+    elif cmd == 'kinds': kinds(args)
     else: sys.exit(__doc__)
