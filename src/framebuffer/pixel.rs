@@ -90,12 +90,7 @@ pub trait Pixel: crate::sealed::Sealed + Copy + Debug + Send + Sync + 'static {
     /// [`resolve_int`](Self::resolve_int) of the whole spans of one line (`line`: the line's
     /// rows), into `out`.
     #[doc(hidden)]
-    #[inline(always)]
-    fn resolve_line_int<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: IntBackground) {
-        for (o, u) in out.iter_mut().zip(line.chunks_exact(LANES * Self::ROWS)) {
-            *o = Self::resolve_int::<L>(u, background);
-        }
-    }
+    fn resolve_line_int<L: Arrangement>(line: &[Row], out: &mut [[[u8; 4]; LANES]], background: IntBackground);
     /// The integer resolve of 8 empty pixels (a span that does not exist), as this kind's
     /// integer resolve writes an empty pixel: for a background that is not a byte value it
     /// may differ from [`crate::to_rgba8`] of it by one step.
