@@ -183,7 +183,7 @@ proptest! {
         check::<MlabKind<4, Unbiased>>(w, h, &ops)?;
         check::<HtKind<1, Unbiased>>(w, h, &ops)?;
         check::<HtKind<3, Unbiased>>(w, h, &ops)?;
-        // 9 slots a pixel: the pixel-major resolves gather into the resolve itself without AVX2.
+        // 9 slots a pixel, the widest: `gather`'s whole-span transpose at its largest size.
         check::<HtKind<8, Unbiased>>(w, h, &ops)?;
     }
 
