@@ -105,12 +105,12 @@ def functions(limit, roots):
                                 print(f'{k + 2 - start:4d} {p}:{start} {name}'); n += 1
     print(f'{n} functions over {limit} lines (test modules left out)')
 
+def code_lines(path):
+    """The lines `codelines` counts, stripped: not blank, not comments, not test modules."""
+    return [t for t in (l.strip() for l in strip_tests(open(path).read()).split('\n')) if t and not t.startswith('//')]
+
 def codelines(roots):
-    total = 0
-    for root in roots:
-        for p in rust_files(root):
-            total += sum(1 for l in strip_tests(open(p).read()).split('\n') if l.strip() and not l.strip().startswith('//'))
-    print(total)
+    print(sum(len(code_lines(p)) for root in roots for p in rust_files(root)))
 
 def kinds(roots):
     c = {'files': 0, 'use/mod': 0, 'attributes': 0, 'other': 0}
@@ -119,10 +119,7 @@ def kinds(roots):
             c['files'] += 1
             cont = None  # the kind of a statement or attribute that goes on to the next line
             depth = 0
-            for l in strip_tests(open(p).read()).split('\n'):
-                t = l.strip()
-                if not t or t.startswith('//'):
-                    continue
+            for t in code_lines(p):
                 if cont == 'use/mod':
                     c[cont] += 1
                     cont = None if t.endswith(';') else cont
