@@ -302,6 +302,11 @@ pub(crate) const fn depth_key(bits: u32) -> i32 {
 pub(crate) const fn centroid_depth(front: Row, back: Row) -> u32 {
     let [f0, zf] = front.words();
     let [b0, zb] = back.words();
+    // Below the threshold the weight is 0 and the depth is the front's: the division and
+    // the order keys are skipped (the common case once a pixel's last row is dense).
+    if f0 >> 24 < CENTROID_MIN_T {
+        return zf;
+    }
     let w = centroid_weight(f0 >> 24, b0 >> 24);
     let (kf, kb) = (depth_key(zf), depth_key(zb));
     let diff = if kb > kf { kb.wrapping_sub(kf) as u32 } else { 0 };

@@ -307,7 +307,12 @@ impl<const S: bool> RowLanes for Lanes8<S> {
                 // All 8 merges in one register (`pack_words`): their first words and their
                 // depths, then back to the rows' low and high dwords.
                 let ((f0, zf), (b0, zb)) = (pack_words(front), pack_words(back));
-                let z = centroid8(f0, b0, zf, zb);
+                // The weight is 0 in every lane whose front is below the threshold: where no
+                // lane's front is, the merged depth is the front's and its chain is skipped.
+                let faint = cast::<i32x8, u32x8>(
+                    cast::<u32x8, i32x8>(f0 >> 24).simd_gt(i32x8::splat(crate::arith::CENTROID_MIN_T as i32 - 1)),
+                );
+                let z = if faint.any() { centroid8(f0, b0, zf, zb) } else { zf };
                 let c = merge_words_unbiased(f0, b0, d.0);
                 let low = |x: u32x8| cast::<u64x4, u32x8>(cast::<u32x8, u64x4>(x) << 32);
                 Lanes8 {
