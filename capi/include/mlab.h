@@ -48,7 +48,24 @@
 #endif
 
 /**
- * The version of this C API. Additions (new functions, new status codes at the end) keep
+ * The major version of this library (the crate's version, `MAJOR.MINOR.PATCH`; `tests/header.rs`
+ * checks that it is `Cargo.toml`'s). The C API's compatibility is `MLAB_ABI_VERSION`'s.
+ */
+#define MLAB_VERSION_MAJOR 0
+
+/**
+ * The minor version of this library.
+ */
+#define MLAB_VERSION_MINOR 1
+
+/**
+ * The patch version of this library.
+ */
+#define MLAB_VERSION_PATCH 0
+
+/**
+ * The version of this C API, and the number in the shared library's SONAME
+ * (`libmlab.so.1`: `build.rs`). Additions (new functions, new status codes at the end) keep
  * it; a changed signature or layout raises it. Compare `mlab_abi_version` (the library
  * linked) with this constant (the header compiled against).
  */

@@ -100,7 +100,16 @@ pub use types::{
     MLAB_METHOD_HYBRID, MLAB_METHOD_MLAB, MlabArithmetic, MlabBackground, MlabBackgroundKind, MlabMethod, MlabRow,
 };
 
-/// The version of this C API. Additions (new functions, new status codes at the end) keep
+/// The major version of this library (the crate's version, `MAJOR.MINOR.PATCH`; `tests/header.rs`
+/// checks that it is `Cargo.toml`'s). The C API's compatibility is `MLAB_ABI_VERSION`'s.
+pub const MLAB_VERSION_MAJOR: u32 = 0;
+/// The minor version of this library.
+pub const MLAB_VERSION_MINOR: u32 = 1;
+/// The patch version of this library.
+pub const MLAB_VERSION_PATCH: u32 = 0;
+
+/// The version of this C API, and the number in the shared library's SONAME
+/// (`libmlab.so.1`: `build.rs`). Additions (new functions, new status codes at the end) keep
 /// it; a changed signature or layout raises it. Compare `mlab_abi_version` (the library
 /// linked) with this constant (the header compiled against).
 pub const MLAB_ABI_VERSION: u32 = 1;
