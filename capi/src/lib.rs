@@ -33,7 +33,7 @@
 //! enum values out of range, sizes (zero, overflow, storage and output lengths), pixels
 //! outside the framebuffer, invalid fragments (NaN, infinities, ranges). Nothing unwinds into
 //! C. A panic (none is expected: the kernel returns errors, on every input) is caught and
-//! returned as `MlabStatus::Internal` by every function but the two per-pixel inserts; in
+//! returned as `MlabStatus::Internal` by every function but the four per-pixel inserts; in
 //! those, where the cost per fragment is the point, it aborts the process, as Rust does for
 //! any panic that reaches an `extern "C"` function.
 //!
