@@ -29,7 +29,8 @@
 //! # What is checked, and what the caller guarantees
 //!
 //! Checked on every call, each with its own `MlabStatus`: null pointers, pointers not
-//! aligned for their type, a framebuffer struct that was not initialized (its magic word),
+//! aligned for their type, a framebuffer struct that was not initialized or was changed since
+//! (the checksum of its fields),
 //! enum values out of range, sizes (zero, overflow, storage and output lengths), pixels
 //! outside the framebuffer, invalid fragments (NaN, infinities, ranges). Nothing unwinds into
 //! C. A panic (none is expected: the kernel returns errors, on every input) is caught and
