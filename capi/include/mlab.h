@@ -48,7 +48,24 @@
 #endif
 
 /**
- * The version of this C API. Additions (new functions, new status codes at the end) keep
+ * The major version of this library (the crate's version, `MAJOR.MINOR.PATCH`; `tests/header.rs`
+ * checks that it is `Cargo.toml`'s). The C API's compatibility is `MLAB_ABI_VERSION`'s.
+ */
+#define MLAB_VERSION_MAJOR 0
+
+/**
+ * The minor version of this library.
+ */
+#define MLAB_VERSION_MINOR 1
+
+/**
+ * The patch version of this library.
+ */
+#define MLAB_VERSION_PATCH 0
+
+/**
+ * The version of this C API, and the number in the shared library's SONAME
+ * (`libmlab.so.1`: `build.rs`). Additions (new functions, new status codes at the end) keep
  * it; a changed signature or layout raises it. Compare `mlab_abi_version` (the library
  * linked) with this constant (the header compiled against).
  */
@@ -196,8 +213,9 @@ typedef struct MlabFramebuffer {
    */
   uint32_t first;
   /**
-   * Private: set by a successful init: `MAGIC`, with the kind
-   * (`layers - 1 + 8 * method + 16 * arithmetic`) in its low 5 bits.
+   * Private: set by a successful init or band: the kind
+   * (`layers - 1 + 8 * method + 16 * arithmetic`) in its low 5 bits, above them a
+   * checksum of every field, which every call checks.
    */
   uint32_t tag;
 } MlabFramebuffer;
@@ -451,10 +469,10 @@ enum MlabStatus mlab_framebuffer_clear(struct MlabFramebuffer *fb);
 /**
  * Inserts one fragment of **straight** (not premultiplied) linear color `r, g, b`, alpha `a`
  * and depth (smaller is nearer) into pixel `(x, y)`: Listing 1 (MLAB) or 2 (HT) of the
- * paper, quantized by the framebuffer's arithmetic. Refused, nothing changed: an invalid
- * fragment (NaN, infinite, negative color, alpha outside `[0, 1]`, `color * alpha` above
- * 1, infinite depth; checked first, the first failing check in the order of `docs/c.md`),
- * then a pixel outside. Without a key: the dithers of the default arithmetic are seeded by
+ * paper, quantized by the framebuffer's arithmetic. Refused, nothing changed: a pixel
+ * outside (checked first), then an invalid fragment (NaN, infinite, negative color, alpha
+ * outside `[0, 1]`, `color * alpha` above 1, infinite depth: the first failing check in
+ * the order of `docs/c.md`). Without a key: the dithers of the default arithmetic are seeded by
  * the fragment's content, and re-roll when its depth changes (`mlab_insert_straight_keyed`).
  *
  * # Safety
@@ -529,11 +547,13 @@ enum MlabStatus mlab_insert_premultiplied_keyed(struct MlabFramebuffer *fb,
 /**
  * Inserts the lanes of `*fragments` that are on in `mask` (bit `i`: pixel `(x + i, y)`),
  * straight color, 8 at a time: byte-identical to `mlab_insert_straight` lane by lane, in
- * lane order. `x` need not be a multiple of 8; every lane that is on must lie inside
- * (otherwise `MLAB_STATUS_OUT_OF_BOUNDS` and nothing changes). `*refused` gets the mask of
- * the lanes that were on and held an invalid fragment: these are skipped, the valid lanes
- * are inserted, and the status is the first refused lane's fragment error (0 refused:
- * `MLAB_STATUS_OK`). On any other error `*refused` is unchanged.
+ * lane order. `x` need not be a multiple of 8; every lane that is on must lie inside,
+ * checked before any fragment (otherwise `MLAB_STATUS_OUT_OF_BOUNDS` and nothing changes).
+ * `*refused` gets the mask of the lanes that were on and held an invalid fragment: these
+ * are skipped, the valid lanes are inserted, and the status is the first refused lane's
+ * fragment error (0 refused: `MLAB_STATUS_OK`). On any other error `*refused` is unchanged.
+ * Mask 0 inserts nothing: `MLAB_STATUS_OK` and `*refused = 0` whatever `x`, `y` and
+ * `fragments` (not read; may be null).
  *
  * # Safety
  * `fb` as for `mlab_insert_straight`; `fragments` is null or valid for a read of one
@@ -593,9 +613,11 @@ enum MlabStatus mlab_insert_span_premultiplied_keyed(struct MlabFramebuffer *fb,
  * through the kernel's span batcher (fragments gathered into 8-pixel span inserts inside
  * the call): byte-identical to calling `mlab_insert_straight` on each in order, faster
  * for MLAB when the fragments of a line come together (`docs/performance.md`). Stops at
- * the first fragment that is invalid or outside: `*inserted` is then its index (the
- * fragments before it are in the framebuffer, it and those after it are not) and the
- * status says why; otherwise `*inserted = count`. Uses about 52 KiB of stack.
+ * the first fragment that is outside or invalid (its pixel checked first, then its values):
+ * `*inserted` is then its index (the fragments before it are in the framebuffer, it and
+ * those after it are not) and the status says why; otherwise `*inserted = count`. Count 0
+ * inserts nothing: `MLAB_STATUS_OK`, `*inserted = 0`, `fragments` not read (may be null, as
+ * an empty array's is). Uses about 52 KiB of stack.
  *
  * # Safety
  * `fb` as for `mlab_insert_straight`; `fragments` is null or valid for reads of `count`

@@ -1,7 +1,7 @@
-//! The framebuffer struct (`MlabFramebuffer`): its private fields and magic word, the check
-//! that a pointer to it is an initialized one (`state`), the rows of storage of a size
-//! (`rows_needed`), and the kernel's typed span grid rebuilt over its rows for one call
-//! (`with_grid!`).
+//! The framebuffer struct (`MlabFramebuffer`): its private fields and their checksum (`seal`),
+//! the check that a pointer to it is an initialized, unchanged one (`state`), the rows of
+//! storage of a size (`rows_needed`), and the kernel's typed span grid rebuilt over its rows
+//! for one call (`with_grid!`).
 
 use mlab::{Layers, Row};
 
@@ -26,8 +26,9 @@ pub struct MlabFramebuffer {
     /// Private: the id of pixel `(0, 0)` in the hashes that seed the dithers: 0, or for a
     /// band the id of its first pixel in the whole framebuffer (`first_line * width`).
     pub(crate) first: u32,
-    /// Private: set by a successful init: `MAGIC`, with the kind
-    /// (`layers - 1 + 8 * method + 16 * arithmetic`) in its low 5 bits.
+    /// Private: set by a successful init or band: the kind
+    /// (`layers - 1 + 8 * method + 16 * arithmetic`) in its low 5 bits, above them a
+    /// checksum of every field, which every call checks.
     pub(crate) tag: u32,
 }
 
@@ -37,11 +38,26 @@ const _: () = assert!(size_of::<MlabFramebuffer>() == 32 && align_of::<MlabFrame
 /// The bits of `MlabFramebuffer::tag` that hold the kind (0 to 31: `with_grid!`'s index).
 const KIND_MASK: u32 = 31;
 
-/// The word that marks an initialized `MlabFramebuffer` ("MLAB", its kind bits cleared): the
-/// rest of its `tag`. (Before the stable fragment key the kind and the magic word had fields
-/// of their own; the band's first pixel id took the kind's place, so that the struct keeps
-/// its size and alignment: the ABI of `MLAB_ABI_VERSION` 1, whose fields are private.)
-pub(crate) const MAGIC: u32 = 0x4d4c_4142 & !KIND_MASK;
+/// The seed of the checksum in `tag` ("MLAB"): a zeroed struct does not pass.
+const MAGIC: u64 = 0x4d4c_4142;
+
+/// The `tag` of a state with these fields: `kind` in the low bits, above them a checksum of
+/// every field (multiply-xor rounds: each field changes the whole product), so that a struct
+/// that was not filled by init or band, or whose fields were changed since (a size changed
+/// with its storage length, a pointer moved), is refused before its rows are touched. A
+/// checksum, not a proof: a change goes unnoticed with probability 2^-27.
+#[inline(always)]
+pub(crate) fn seal(storage: *mut MlabRow, storage_rows: usize, width: u32, height: u32, first: u32, kind: u32) -> u32 {
+    const K: u64 = 0x9e37_79b9_7f4a_7c15;
+    let words = [
+        storage.addr() as u64,
+        storage_rows as u64,
+        u64::from(width) << 32 | u64::from(height),
+        u64::from(first) << 32 | u64::from(kind),
+    ];
+    let h = words.iter().fold(MAGIC, |h, &w| (h ^ w).wrapping_mul(K));
+    (h >> 32) as u32 & !KIND_MASK | kind
+}
 
 impl MlabFramebuffer {
     pub(crate) const ZEROED: MlabFramebuffer = MlabFramebuffer {
@@ -101,7 +117,7 @@ pub(crate) fn rows_needed(method: MlabMethod, layers: u32, width: u32, height: u
     Ok(rows)
 }
 
-/// The initialized framebuffer struct behind `fb`.
+/// The initialized framebuffer struct behind `fb`, its fields unchanged since (`seal`).
 ///
 /// # Safety
 /// `fb` is null or points to a readable `MlabFramebuffer` (initialized or not).
@@ -110,7 +126,7 @@ pub(crate) unsafe fn state<'s>(fb: *const MlabFramebuffer) -> Result<&'s MlabFra
     check_ptr(fb, align_of::<MlabFramebuffer>())?;
     // SAFETY: non-null and aligned (checked); readable (the caller's guarantee).
     let s = unsafe { &*fb };
-    if s.tag & !KIND_MASK != MAGIC {
+    if s.tag != seal(s.storage, s.storage_rows, s.width, s.height, s.first, s.kind()) {
         return Err(MlabStatus::NotInitialized);
     }
     Ok(s)

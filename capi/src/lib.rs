@@ -29,11 +29,12 @@
 //! # What is checked, and what the caller guarantees
 //!
 //! Checked on every call, each with its own `MlabStatus`: null pointers, pointers not
-//! aligned for their type, a framebuffer struct that was not initialized (its magic word),
+//! aligned for their type, a framebuffer struct that was not initialized or was changed since
+//! (the checksum of its fields),
 //! enum values out of range, sizes (zero, overflow, storage and output lengths), pixels
 //! outside the framebuffer, invalid fragments (NaN, infinities, ranges). Nothing unwinds into
 //! C. A panic (none is expected: the kernel returns errors, on every input) is caught and
-//! returned as `MlabStatus::Internal` by every function but the two per-pixel inserts; in
+//! returned as `MlabStatus::Internal` by every function but the four per-pixel inserts; in
 //! those, where the cost per fragment is the point, it aborts the process, as Rust does for
 //! any panic that reaches an `extern "C"` function.
 //!
@@ -100,7 +101,16 @@ pub use types::{
     MLAB_METHOD_HYBRID, MLAB_METHOD_MLAB, MlabArithmetic, MlabBackground, MlabBackgroundKind, MlabMethod, MlabRow,
 };
 
-/// The version of this C API. Additions (new functions, new status codes at the end) keep
+/// The major version of this library (the crate's version, `MAJOR.MINOR.PATCH`; `tests/header.rs`
+/// checks that it is `Cargo.toml`'s). The C API's compatibility is `MLAB_ABI_VERSION`'s.
+pub const MLAB_VERSION_MAJOR: u32 = 0;
+/// The minor version of this library.
+pub const MLAB_VERSION_MINOR: u32 = 1;
+/// The patch version of this library.
+pub const MLAB_VERSION_PATCH: u32 = 0;
+
+/// The version of this C API, and the number in the shared library's SONAME
+/// (`libmlab.so.1`: `build.rs`). Additions (new functions, new status codes at the end) keep
 /// it; a changed signature or layout raises it. Compare `mlab_abi_version` (the library
 /// linked) with this constant (the header compiled against).
 pub const MLAB_ABI_VERSION: u32 = 1;

@@ -5,7 +5,7 @@
 use mlab::Framebuffer;
 
 use crate::boundary::{check_ptr, guard};
-use crate::framebuffer::{MAGIC, MlabFramebuffer, rows_needed, state, with_grid};
+use crate::framebuffer::{MlabFramebuffer, rows_needed, seal, state, with_grid};
 use crate::status::MlabStatus;
 use crate::types::{MLAB_ARITHMETIC_PAPER, MlabArithmetic, MlabMethod, MlabRow};
 
@@ -66,15 +66,16 @@ pub unsafe extern "C" fn mlab_framebuffer_init(
         if storage_rows != expected {
             return Err(MlabStatus::StorageLength);
         }
+        // The kind is in 0..32: method is 0 or 1, layers 1 to 8, arithmetic 0 or 1 (checked
+        // above).
+        let kind = (layers - 1) | method << 3 | arithmetic << 4;
         let state = MlabFramebuffer {
             storage,
             storage_rows,
             width,
             height,
             first: 0,
-            // The kind is in 0..32: method is 0 or 1, layers 1 to 8, arithmetic 0 or 1
-            // (checked above).
-            tag: MAGIC | (layers - 1) | method << 3 | arithmetic << 4,
+            tag: seal(storage, storage_rows, width, height, 0, kind),
         };
         with_grid!(&state, f => {
             f.clear();
@@ -124,15 +125,18 @@ pub unsafe extern "C" fn mlab_framebuffer_band(
         // Both at most `storage_rows` (checked just above): no overflow.
         let offset = first_line as usize * line_rows;
         let rows = lines as usize * line_rows;
+        // `wrapping_add`: no dereference here; in bounds of the storage (checked above), so
+        // the pointer keeps the storage's provenance and alignment.
+        let storage = s.storage.wrapping_add(offset);
+        // The id of its first pixel in the whole framebuffer (wrapping, as the kernel's
+        // `split_lines`): a band of a band keeps counting from the whole's.
+        let first = s.first.wrapping_add(first_line.wrapping_mul(s.width));
         let sub = MlabFramebuffer {
-            // `wrapping_add`: no dereference here; in bounds of the storage (checked above),
-            // so the pointer keeps the storage's provenance and alignment.
-            storage: s.storage.wrapping_add(offset),
+            storage,
             storage_rows: rows,
             height: lines,
-            // The id of its first pixel in the whole framebuffer (wrapping, as the kernel's
-            // `split_lines`): a band of a band keeps counting from the whole's.
-            first: s.first.wrapping_add(first_line.wrapping_mul(s.width)),
+            first,
+            tag: seal(storage, rows, s.width, lines, first, s.kind()),
             ..s
         };
         // SAFETY: as above.

@@ -1,6 +1,7 @@
 //! The resolves: every pixel composited over a background into the caller's RGBA8, f32 or
 //! RGBA16F image.
 
+use mlab::framebuffer::Output;
 use mlab::glam::{Vec3, Vec4};
 use mlab::half::f16;
 use mlab::{Background, Framebuffer};
@@ -44,6 +45,28 @@ fn background(bg: MlabBackground) -> Result<Background, MlabStatus> {
     }
 }
 
+/// Every pixel resolved into `out`, `out_pixels` pixels of the format `O` aligned to `align`
+/// bytes: the body of the three resolves.
+///
+/// # Safety
+/// As `mlab_resolve_rgba8`, `out` valid for writes of `out_pixels` `O`; any bits are a valid `O`.
+unsafe fn resolve<O: Output>(
+    fb: *const MlabFramebuffer,
+    background: MlabBackground,
+    out: *mut O,
+    out_pixels: usize,
+    align: usize,
+) -> MlabStatus {
+    guard(|| {
+        // SAFETY: the caller's guarantee on `fb`.
+        let s = unsafe { state(fb) }?;
+        let bg = self::background(background)?;
+        // SAFETY: the caller's guarantee on `out`.
+        let out = unsafe { output(s, out, out_pixels, align) }?;
+        with_grid!(s, f => Ok(f.resolve_as(out, bg)?))
+    })
+}
+
 /// Resolves every pixel into RGBA8 (`out`: `4 * out_pixels` bytes, `out_pixels = width *
 /// height`, row-major, R, G, B, A per pixel): the kernel's integer resolve (the same bytes in
 /// scalar code, every SIMD backend and its WGSL twin), linear unorm8 (not sRGB), over
@@ -59,14 +82,8 @@ pub unsafe extern "C" fn mlab_resolve_rgba8(
     out: *mut u8,
     out_pixels: usize,
 ) -> MlabStatus {
-    guard(|| {
-        // SAFETY: the caller's guarantee on `fb`.
-        let s = unsafe { state(fb) }?;
-        let bg = self::background(background)?;
-        // SAFETY: the caller's guarantee on `out`; `[u8; 4]` takes any bits.
-        let out = unsafe { output(s, out.cast::<[u8; 4]>(), out_pixels, 1) }?;
-        with_grid!(s, f => Ok(f.resolve_rgba8(out, bg)?))
-    })
+    // SAFETY: the caller's guarantee, passed on; `[u8; 4]` takes any bits.
+    unsafe { resolve(fb, background, out.cast::<[u8; 4]>(), out_pixels, 1) }
 }
 
 /// Resolves every pixel into f32 RGBA (`out`: `4 * out_pixels` floats, **16-byte aligned**,
@@ -82,15 +99,9 @@ pub unsafe extern "C" fn mlab_resolve_f32(
     out_pixels: usize,
 ) -> MlabStatus {
     const { assert!(size_of::<Vec4>() == 16 && align_of::<Vec4>() <= 16) };
-    guard(|| {
-        // SAFETY: the caller's guarantee on `fb`.
-        let s = unsafe { state(fb) }?;
-        let bg = self::background(background)?;
-        // SAFETY: the caller's guarantee on `out`; a `Vec4` is four f32 (asserted above:
-        // 16 bytes, alignment at most the 16 checked), any bits valid.
-        let out = unsafe { output(s, out.cast::<Vec4>(), out_pixels, 16) }?;
-        with_grid!(s, f => Ok(f.resolve_into(out, bg)?))
-    })
+    // SAFETY: the caller's guarantee, passed on; a `Vec4` is four f32 (asserted above: 16
+    // bytes, alignment at most the 16 checked), any bits valid.
+    unsafe { resolve(fb, background, out.cast::<Vec4>(), out_pixels, 16) }
 }
 
 /// Resolves every pixel into RGBA16F (`out`: `4 * out_pixels` IEEE binary16 values as
@@ -106,12 +117,6 @@ pub unsafe extern "C" fn mlab_resolve_rgba16f(
     out_pixels: usize,
 ) -> MlabStatus {
     const { assert!(size_of::<[f16; 4]>() == 8 && align_of::<[f16; 4]>() == 2) };
-    guard(|| {
-        // SAFETY: the caller's guarantee on `fb`.
-        let s = unsafe { state(fb) }?;
-        let bg = self::background(background)?;
-        // SAFETY: the caller's guarantee on `out`; `f16` is a transparent u16 (any bits).
-        let out = unsafe { output(s, out.cast::<[f16; 4]>(), out_pixels, 2) }?;
-        with_grid!(s, f => Ok(f.resolve_rgba16f(out, bg)?))
-    })
+    // SAFETY: the caller's guarantee, passed on; `f16` is a transparent u16 (any bits).
+    unsafe { resolve(fb, background, out.cast::<[f16; 4]>(), out_pixels, 2) }
 }

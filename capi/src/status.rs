@@ -93,7 +93,7 @@ const MESSAGES: [&core::ffi::CStr; 20] = [
     c"ok",
     c"a pointer argument is null",
     c"a pointer argument is not aligned for its type",
-    c"the framebuffer struct was not initialized by mlab_framebuffer_init",
+    c"the framebuffer struct was not initialized by mlab_framebuffer_init, or was changed since",
     c"a method, arithmetic or background kind is not one of the defined constants",
     c"a width, height or number of lines is 0",
     c"the size overflows size_t",

@@ -171,6 +171,35 @@ impl Bits for Vec<[f16; 4]> {
     }
 }
 
+/// What the C API's per-pixel insert of `(x, y, rgba, depth)` (keyed or not) returns, through
+/// the Rust API: the pixel checked first, then the fragment (the C API's order of the
+/// checks; the Rust API builds the fragment before it knows the pixel), then the insert.
+#[allow(clippy::too_many_arguments)]
+fn rust_insert<A: Arithmetic>(
+    r: &mut DynFramebuffer<'_, A>,
+    x: u32,
+    y: u32,
+    rgba: [f32; 4],
+    depth: f32,
+    key: Option<u32>,
+    straight: bool,
+) -> MlabStatus {
+    if x >= r.width() || y >= r.height() {
+        return MlabStatus::OutOfBounds;
+    }
+    let f = if straight {
+        Fragment::straight_rgba(rgba, depth)
+    } else {
+        Fragment::premultiplied_rgba(rgba, depth)
+    };
+    match f {
+        Err(err) => MlabStatus::from(err),
+        Ok(f) => r
+            .insert(x, y, &key.map_or(f, |k| f.with_key(k)))
+            .map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
+    }
+}
+
 /// Per-pixel inserts (straight, then premultiplied), span inserts and the batch, against
 /// the Rust API in arithmetic `A` (`arith` is its C constant).
 fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArithmetic) {
@@ -198,17 +227,7 @@ fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArith
                 mlab_insert_premultiplied(&mut c.fb, e.x, e.y, cr, cg, cb, ca, e.depth)
             }
         };
-        let f = if straight {
-            Fragment::straight_rgba(e.rgba, e.depth)
-        } else {
-            Fragment::premultiplied_rgba(e.rgba, e.depth)
-        };
-        let want = match f {
-            Err(err) => MlabStatus::from(err),
-            Ok(f) => r
-                .insert(e.x, e.y, &f)
-                .map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
-        };
+        let want = rust_insert(&mut r, e.x, e.y, e.rgba, e.depth, None, straight);
         assert_eq!(got, want, "{what}: fragment {i} {e:?}");
         errors += (got != MlabStatus::Ok) as usize;
     }
@@ -290,17 +309,7 @@ fn check_config<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArith
         let mut r = DynFramebuffer::<A>::new_cleared(kind, &mut storage, W, H).unwrap();
         let mut want_stops = Vec::new();
         for (i, e) in events.iter().enumerate() {
-            let f = if straight {
-                Fragment::straight_rgba(e.rgba, e.depth)
-            } else {
-                Fragment::premultiplied_rgba(e.rgba, e.depth)
-            };
-            let st = match f {
-                Err(err) => MlabStatus::from(err),
-                Ok(f) => r
-                    .insert(e.x, e.y, &f)
-                    .map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
-            };
+            let st = rust_insert(&mut r, e.x, e.y, e.rgba, e.depth, None, straight);
             if st != MlabStatus::Ok {
                 want_stops.push((i, st));
             }
@@ -423,17 +432,7 @@ fn keyed_stream(seed: u64, n: usize) -> Vec<MlabPixelFragmentKeyed> {
 
 /// The Rust API's fragment of a keyed event, and the status the C API must return for it.
 fn rust_keyed<A: Arithmetic>(r: &mut DynFramebuffer<'_, A>, e: &MlabPixelFragmentKeyed, straight: bool) -> MlabStatus {
-    let f = if straight {
-        Fragment::straight_rgba(e.rgba, e.depth)
-    } else {
-        Fragment::premultiplied_rgba(e.rgba, e.depth)
-    };
-    match f {
-        Err(err) => MlabStatus::from(err),
-        Ok(f) => r
-            .insert(e.x, e.y, &f.with_key(e.key))
-            .map_or_else(MlabStatus::from, |()| MlabStatus::Ok),
-    }
+    rust_insert(r, e.x, e.y, e.rgba, e.depth, Some(e.key), straight)
 }
 
 /// A random keyed span (some lanes invalid).
@@ -497,15 +496,7 @@ fn check_keyed<A: Arithmetic>(method: MlabMethod, layers: u32, arith: MlabArithm
         let want = if keyed {
             rust_keyed(&mut r, e, straight)
         } else {
-            let f = if straight {
-                Fragment::straight_rgba(e.rgba, e.depth)
-            } else {
-                Fragment::premultiplied_rgba(e.rgba, e.depth)
-            };
-            f.map_or_else(MlabStatus::from, |f| {
-                r.insert(e.x, e.y, &f)
-                    .map_or_else(MlabStatus::from, |()| MlabStatus::Ok)
-            })
+            rust_insert(&mut r, e.x, e.y, e.rgba, e.depth, None, straight)
         };
         assert_eq!(got, want, "{what}: fragment {i} {e:?}");
         errors += (got != MlabStatus::Ok) as usize;

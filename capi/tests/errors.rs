@@ -267,8 +267,9 @@ fn invalid_fragments_are_reported_not_dropped() {
             // SAFETY: an initialized framebuffer; valid span and byte.
             unsafe {
                 assert_eq!(mlab_insert_straight(&mut c.fb, 1, 1, r, g, b, a, depth), want);
-                // The fragment is checked before the pixel.
-                assert_eq!(mlab_insert_straight(&mut c.fb, W, H, r, g, b, a, depth), want);
+                // The pixel is checked before the fragment.
+                let outside = MlabStatus::OutOfBounds;
+                assert_eq!(mlab_insert_straight(&mut c.fb, W, H, r, g, b, a, depth), outside);
                 assert_eq!(c.bytes(), before, "nothing inserted");
                 // In a span: the lane is refused, the others inserted.
                 let st = mlab_insert_span_straight(&mut c.fb, 0, 0, &span, 0b0010_0001, &mut refused);
@@ -277,7 +278,10 @@ fn invalid_fragments_are_reported_not_dropped() {
                 mlab_framebuffer_clear(&mut c.fb);
                 // The keyed inserts: the same statuses.
                 assert_eq!(mlab_insert_straight_keyed(&mut c.fb, 1, 1, r, g, b, a, depth, 9), want);
-                assert_eq!(mlab_insert_straight_keyed(&mut c.fb, W, H, r, g, b, a, depth, 9), want);
+                assert_eq!(
+                    mlab_insert_straight_keyed(&mut c.fb, W, H, r, g, b, a, depth, 9),
+                    outside
+                );
                 assert_eq!(c.bytes(), before, "nothing inserted");
                 let st = mlab_insert_span_straight_keyed(&mut c.fb, 0, 0, &keyed, 0b0000_0110, &mut refused);
                 assert_eq!((st, refused), (want, 0b0000_0100), "keyed {rgba:?} {depth}");
@@ -382,8 +386,9 @@ fn pixels_outside_are_reported() {
         bad[1].depth = f32::INFINITY;
         let st = mlab_insert_batch_premultiplied_keyed(&mut c.fb, bad.as_ptr(), bad.len(), &mut inserted);
         assert_eq!((st, inserted), (MlabStatus::InfiniteDepth, 1));
+        inserted = 99;
         let st = mlab_insert_batch_premultiplied_keyed(&mut c.fb, null(), 0, &mut inserted);
-        assert_eq!(st, MlabStatus::NullPointer, "null, even with count 0");
+        assert_eq!((st, inserted), (MlabStatus::Ok, 0), "count 0: null is an empty array");
     }
 }
 
@@ -422,7 +427,7 @@ fn span_and_batch_pointers_are_checked() {
             MlabStatus::Misaligned
         );
         assert_eq!(
-            mlab_insert_batch_straight(fb, null(), 0, &mut inserted),
+            mlab_insert_batch_straight(fb, null(), 1, &mut inserted),
             MlabStatus::NullPointer
         );
         assert_eq!(
@@ -514,6 +519,186 @@ fn keyed_span_and_batch_pointers_are_checked() {
     }
     assert_eq!((refused, inserted), (0xaa, 77), "out-parameters untouched");
     assert_eq!(c.bytes(), before, "nothing inserted");
+}
+
+/// The order of the checks, one rule for every insert: the pointers and the state, then the
+/// coordinates (the pixel, or every lane that is on), then the fragment's values. An insert
+/// of nothing (mask 0, count 0) reads no fragment and checks no coordinate.
+#[test]
+fn checks_come_in_one_order() {
+    let mut c = c_fb(MLAB_METHOD_MLAB, 2);
+    let before = c.bytes();
+    let nan = f32::NAN;
+    let mut span = SPAN;
+    span.a[1] = nan;
+    let mut keyed = SPAN_KEYED;
+    keyed.depth[1] = nan;
+    let bad = MlabPixelFragment {
+        x: W,
+        y: 0,
+        rgba: [0.5, 0.5, 0.5, nan],
+        depth: 1.0,
+    };
+    let bad_keyed = MlabPixelFragmentKeyed {
+        x: 0,
+        y: H,
+        rgba: [nan; 4],
+        depth: 1.0,
+        key: 1,
+    };
+    let (mut refused, mut inserted) = (0xaau8, 99usize);
+    let oob = MlabStatus::OutOfBounds;
+    // SAFETY: an initialized framebuffer; every pointer valid (or null where nothing is read).
+    unsafe {
+        let fb = &mut c.fb as *mut MlabFramebuffer;
+        // An invalid fragment at a pixel outside: the pixel's status.
+        assert_eq!(mlab_insert_straight(fb, W, 0, nan, 0.5, 0.5, 0.5, 1.0), oob);
+        assert_eq!(mlab_insert_premultiplied(fb, 0, H, 0.5, 0.5, 0.5, nan, 1.0), oob);
+        assert_eq!(mlab_insert_straight_keyed(fb, 99, 0, 0.5, 0.5, 0.5, 0.5, nan, 4), oob);
+        assert_eq!(
+            mlab_insert_premultiplied_keyed(fb, 0, 99, -1.0, 0.5, 0.5, 0.5, 1.0, 4),
+            oob
+        );
+        // A NaN lane and a lane outside (lane 7 at x = 6 is pixel 13): the lane outside's
+        // status, nothing inserted, `*refused` unchanged.
+        for mask in [0b1000_0010, 0b1000_0011] {
+            assert_eq!(mlab_insert_span_straight(fb, 6, 0, &span, mask, &mut refused), oob);
+            assert_eq!(mlab_insert_span_premultiplied(fb, 6, 0, &span, mask, &mut refused), oob);
+            assert_eq!(
+                mlab_insert_span_straight_keyed(fb, 6, 0, &keyed, mask, &mut refused),
+                oob
+            );
+            assert_eq!(
+                mlab_insert_span_premultiplied_keyed(fb, 6, 0, &keyed, mask, &mut refused),
+                oob
+            );
+        }
+        assert_eq!(refused, 0xaa);
+        // In a batch, each fragment's pixel before its values.
+        assert_eq!(mlab_insert_batch_straight(fb, &bad, 1, &mut inserted), oob);
+        assert_eq!(mlab_insert_batch_premultiplied(fb, &bad, 1, &mut inserted), oob);
+        assert_eq!(mlab_insert_batch_straight_keyed(fb, &bad_keyed, 1, &mut inserted), oob);
+        assert_eq!(
+            mlab_insert_batch_premultiplied_keyed(fb, &bad_keyed, 1, &mut inserted),
+            oob
+        );
+        assert_eq!(inserted, 0);
+        assert_eq!(c.bytes(), before, "nothing inserted");
+
+        // Mask 0 inserts nothing, wherever it is: x and y alike, fragments not read.
+        for (x, y) in [(1000, 0), (0, 1000), (u32::MAX, u32::MAX), (0, 0)] {
+            for (f, k) in [(&SPAN as *const _, &SPAN_KEYED as *const _), (null(), null())] {
+                refused = 0xaa;
+                assert_eq!(mlab_insert_span_straight(fb, x, y, f, 0, &mut refused), MlabStatus::Ok);
+                assert_eq!(refused, 0, "({x}, {y})");
+                refused = 0xaa;
+                assert_eq!(
+                    mlab_insert_span_premultiplied(fb, x, y, f, 0, &mut refused),
+                    MlabStatus::Ok
+                );
+                assert_eq!(
+                    mlab_insert_span_straight_keyed(fb, x, y, k, 0, &mut refused),
+                    MlabStatus::Ok
+                );
+                assert_eq!(
+                    mlab_insert_span_premultiplied_keyed(fb, x, y, k, 0, &mut refused),
+                    MlabStatus::Ok
+                );
+                assert_eq!(refused, 0, "({x}, {y})");
+            }
+        }
+        // Its out-parameter is still written, so still checked.
+        assert_eq!(
+            mlab_insert_span_straight(fb, 0, 0, &SPAN, 0, null_mut()),
+            MlabStatus::NullPointer
+        );
+        // Count 0 inserts nothing: a null pointer (an empty std::vector's data()) is fine, as
+        // is any other, which is not read.
+        let off = [0u32; 16].as_ptr().cast::<u8>().wrapping_add(1);
+        for f in [null(), off.cast(), &bad as *const MlabPixelFragment] {
+            inserted = 99;
+            assert_eq!(mlab_insert_batch_straight(fb, f, 0, &mut inserted), MlabStatus::Ok);
+            assert_eq!(inserted, 0);
+            inserted = 99;
+            assert_eq!(mlab_insert_batch_premultiplied(fb, f, 0, &mut inserted), MlabStatus::Ok);
+            assert_eq!(inserted, 0);
+        }
+        for f in [null(), off.cast(), &bad_keyed as *const MlabPixelFragmentKeyed] {
+            inserted = 99;
+            assert_eq!(
+                mlab_insert_batch_straight_keyed(fb, f, 0, &mut inserted),
+                MlabStatus::Ok
+            );
+            assert_eq!(inserted, 0);
+            inserted = 99;
+            assert_eq!(
+                mlab_insert_batch_premultiplied_keyed(fb, f, 0, &mut inserted),
+                MlabStatus::Ok
+            );
+            assert_eq!(inserted, 0);
+        }
+        assert_eq!(
+            mlab_insert_batch_straight(fb, null(), 0, null_mut()),
+            MlabStatus::NullPointer
+        );
+    }
+    assert_eq!(c.bytes(), before, "nothing inserted");
+}
+
+/// The field of a framebuffer struct at byte `offset`, as a C caller reaches the fields the
+/// header shows (`fb.height`): the layout is `#[repr(C)]` (pointer, size_t, then four u32).
+fn field<T>(fb: &mut MlabFramebuffer, offset: usize) -> &mut T {
+    // SAFETY: `offset` is that of a field of type `T` in the 64-bit layout (checked by the
+    // caller against the values init wrote).
+    unsafe { &mut *(fb as *mut MlabFramebuffer).cast::<u8>().add(offset).cast::<T>() }
+}
+
+/// A struct changed since its init or band is refused: `MLAB_STATUS_NOT_INITIALIZED`, by
+/// every call, before its rows are touched.
+#[cfg(target_pointer_width = "64")]
+#[test]
+fn a_changed_struct_is_refused() {
+    const STORAGE_ROWS: usize = 8;
+    const HEIGHT: usize = 20;
+    for (method, layers) in [(MLAB_METHOD_MLAB, 2), (MLAB_METHOD_HYBRID, 3)] {
+        let mut c = c_fb(method, layers);
+        let before = c.bytes();
+        // The offsets are those of the fields: the values init wrote.
+        assert_eq!(*field::<usize>(&mut c.fb, STORAGE_ROWS), c.storage.len());
+        assert_eq!(*field::<u32>(&mut c.fb, 16), W);
+        assert_eq!(*field::<u32>(&mut c.fb, HEIGHT), H);
+        // `m = fb; m.height += 3; mlab_rows_needed(..., H + 3, &m.storage_rows);
+        // mlab_insert_straight(&m, 0, H + 2, ...)`: would write past the storage.
+        let mut m = c.fb;
+        *field::<u32>(&mut m, HEIGHT) += 3;
+        // SAFETY: a size_t to write.
+        let st = unsafe { mlab_rows_needed(method, layers, W, H + 3, field::<usize>(&mut m, STORAGE_ROWS)) };
+        assert_eq!(st, MlabStatus::Ok);
+        // SAFETY: `m` is refused before its (too short) storage is touched.
+        let st = unsafe { mlab_insert_straight(&mut m, 0, H + 2, 0.5, 0.5, 0.5, 0.5, 1.0) };
+        assert_eq!(st, MlabStatus::NotInitialized);
+        every_call_returns(&mut m, MlabStatus::NotInitialized, "height and storage_rows changed");
+        // Each field alone: the pointer, the length, width, height, first pixel, kind.
+        for (offset, size, what) in [
+            (0, 8, "storage"),
+            (STORAGE_ROWS, 8, "storage_rows"),
+            (16, 4, "width"),
+            (HEIGHT, 4, "height"),
+            (24, 4, "first"),
+            (28, 4, "tag"),
+        ] {
+            for bit in [0, 3, 5, 31] {
+                let mut m = c.fb;
+                let b = field::<u8>(&mut m, offset + bit / 8 % size);
+                *b ^= 1 << (bit % 8);
+                every_call_returns(&mut m, MlabStatus::NotInitialized, &format!("{what} bit {bit}"));
+            }
+        }
+        assert_eq!(c.bytes(), before, "nothing written");
+        // A copy, anywhere in memory, is the same view: accepted.
+        let mut copy = Box::new(c.fb);
+        every_call_returns_ok(&mut *copy);
+    }
 }
 
 #[test]

@@ -1,6 +1,6 @@
 //! `include/mlab.h` is what cbindgen generates from `src/lib.rs` (and the modules it declares,
 //! in their order) with `cbindgen.toml`, byte for byte: a change of the API that is not in the
-//! checked-in header fails here.
+//! checked-in header fails here. Its version macros are the crate's version.
 //! `MLAB_BLESS=1 cargo test -p mlab-capi --test header` rewrites the header.
 
 use std::path::Path;
@@ -26,5 +26,23 @@ fn header_is_generated_from_the_source() {
         "include/mlab.h differs from what cbindgen generates from src/ (MLAB_BLESS=1 \
          cargo test -p mlab-capi --test header rewrites it); generated:\n{}",
         String::from_utf8_lossy(&generated)
+    );
+}
+
+/// The header's version macros are the crate's version.
+#[test]
+fn version_macros_are_the_crate_version() {
+    let v = |s: &str| s.parse::<u32>().unwrap();
+    assert_eq!(
+        [
+            mlab_capi::MLAB_VERSION_MAJOR,
+            mlab_capi::MLAB_VERSION_MINOR,
+            mlab_capi::MLAB_VERSION_PATCH
+        ],
+        [
+            v(env!("CARGO_PKG_VERSION_MAJOR")),
+            v(env!("CARGO_PKG_VERSION_MINOR")),
+            v(env!("CARGO_PKG_VERSION_PATCH"))
+        ]
     );
 }

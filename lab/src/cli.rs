@@ -67,8 +67,9 @@ OPTIONS:
     --no-flip         skip the FLIP metric
     -h, --help        this text
 
-Dump format (little endian): magic OITFRAG1, u32 width, u32 height, 3 x f32 background,
-u64 count, then per fragment u32 x, u32 y, f32 depth, 3 x f32 premultiplied color, f32 alpha.
+Dump format (little endian): magic OITFRAG2, u32 width, u32 height, 3 x f32 background,
+u64 count, then per fragment u32 x, u32 y, f32 depth, 3 x f32 premultiplied color, f32 alpha,
+u32 key (the primitive's id); OITFRAG1 files (no key: fragments keyed by their index) still load.
 ";
 
 const BENCH_HELP: &str = "\

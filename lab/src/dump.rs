@@ -6,31 +6,36 @@
 //!
 //! | offset | size | field |
 //! |---|---|---|
-//! | 0 | 8 | magic `OITFRAG1` (ASCII) |
+//! | 0 | 8 | magic `OITFRAG2` (ASCII) |
 //! | 8 | 4 | width, u32, 1 ..= 16384 |
 //! | 12 | 4 | height, u32, 1 ..= 16384 |
 //! | 16 | 12 | background linear RGB, 3 x f32, finite, >= 0 |
 //! | 28 | 8 | fragment count `n`, u64 |
-//! | 36 | 28 n | fragments in submission order |
+//! | 36 | 32 n | fragments in submission order |
 //!
-//! Each fragment (28 bytes): x u32, y u32, depth f32 (distance from the viewer, smaller is
-//! nearer, finite), premultiplied color 3 x f32 (each in `[0, 1]`), alpha f32 (`[0, 1]`).
-//! The file ends right after the last fragment. Every value is checked on reading: a bad
-//! file gives a [`DumpError`] naming what and where, never a panic.
+//! Each fragment (32 bytes): x u32, y u32, depth f32 (distance from the viewer, smaller is
+//! nearer, finite), premultiplied color 3 x f32 (each in `[0, 1]`), alpha f32 (`[0, 1]`), key
+//! u32: the id of the primitive that emitted it ([`Frag::prim`], the kernel's fragment key:
+//! unique per primitive within a pixel's fragments, the same in every frame), so that
+//! `evaluate` replays the bytes of a renderer that keys its fragments. The file ends right
+//! after the last fragment. Every value is checked on reading: a bad file gives a
+//! [`DumpError`] naming what and where, never a panic.
 //!
-//! The format has no primitive ids: writing drops [`Frag::prim`], and reading gives each
-//! fragment its index in the file as its primitive id (unique in the frame, as the kernel's
-//! fragment key must be; a dump is one frame, with no camera path to hold still along).
-
+//! The first version of the format, magic `OITFRAG1`, has 28-byte fragments without the key;
+//! it is still read, each fragment keyed by its index in the file (unique in the frame).
 use crate::stream::{Frag, Stream};
 use mlab::FragmentError;
 
-/// The magic bytes.
-pub const MAGIC: [u8; 8] = *b"OITFRAG1";
+/// The magic bytes (what [`to_bytes`] writes).
+pub const MAGIC: [u8; 8] = *b"OITFRAG2";
+/// The magic bytes of the first version, without keys (still read).
+pub const MAGIC_V1: [u8; 8] = *b"OITFRAG1";
 /// Header size in bytes.
 pub const HEADER: usize = 36;
 /// Fragment record size in bytes.
-pub const RECORD: usize = 28;
+pub const RECORD: usize = 32;
+/// Fragment record size of the first version, without the key.
+pub const RECORD_V1: usize = 28;
 /// Largest width or height.
 pub const MAX_SIDE: u32 = 16384;
 
@@ -39,9 +44,9 @@ pub const MAX_SIDE: u32 = 16384;
 pub enum DumpError {
     /// The file could not be read or written.
     Io(String),
-    /// The first 8 bytes are not `OITFRAG1`.
+    /// The first 8 bytes are neither `OITFRAG2` nor `OITFRAG1`.
     BadMagic,
-    /// Shorter than its header or than `36 + 28 n` bytes.
+    /// Shorter than its header or than `36 + 32 n` bytes (`36 + 28 n` for `OITFRAG1`).
     Truncated {
         /// Bytes needed.
         expected: u64,
@@ -81,7 +86,10 @@ impl std::fmt::Display for DumpError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             DumpError::Io(e) => write!(f, "{e}"),
-            DumpError::BadMagic => write!(f, "not a fragment dump: the file does not start with OITFRAG1"),
+            DumpError::BadMagic => write!(
+                f,
+                "not a fragment dump: the file does not start with OITFRAG2 or OITFRAG1"
+            ),
             DumpError::Truncated { expected, actual } => {
                 write!(f, "truncated fragment dump: {actual} bytes, the header says {expected}")
             }
@@ -118,6 +126,7 @@ pub fn to_bytes(s: &Stream) -> Vec<u8> {
             b.extend_from_slice(&c.to_le_bytes());
         }
         b.extend_from_slice(&f.alpha.to_le_bytes());
+        b.extend_from_slice(&f.prim.to_le_bytes());
     }
     b
 }
@@ -130,11 +139,13 @@ fn f32_at(b: &[u8], o: usize) -> f32 {
     f32::from_bits(u32_at(b, o))
 }
 
-/// Parse and check a dump.
+/// Parse and check a dump, either version.
 pub fn from_bytes(b: &[u8]) -> Result<Stream, DumpError> {
-    if b.len() < MAGIC.len() || b[..MAGIC.len()] != MAGIC {
-        return Err(DumpError::BadMagic);
-    }
+    let record = match b.get(..MAGIC.len()) {
+        Some(m) if m == MAGIC => RECORD,
+        Some(m) if m == MAGIC_V1 => RECORD_V1,
+        _ => return Err(DumpError::BadMagic),
+    };
     if b.len() < HEADER {
         return Err(DumpError::Truncated {
             expected: HEADER as u64,
@@ -151,7 +162,7 @@ pub fn from_bytes(b: &[u8]) -> Result<Stream, DumpError> {
     }
     let n = u64::from_le_bytes(b[28..36].try_into().unwrap_or([0; 8]));
     let expected = n
-        .checked_mul(RECORD as u64)
+        .checked_mul(record as u64)
         .and_then(|x| x.checked_add(HEADER as u64))
         .unwrap_or(u64::MAX);
     let actual = b.len() as u64;
@@ -162,7 +173,7 @@ pub fn from_bytes(b: &[u8]) -> Result<Stream, DumpError> {
         return Err(DumpError::TrailingBytes { expected, actual });
     }
     let mut frags = Vec::with_capacity(n as usize);
-    for (i, r) in b[HEADER..].chunks_exact(RECORD).enumerate() {
+    for (i, r) in b[HEADER..].chunks_exact(record).enumerate() {
         let index = i as u64;
         let (x, y) = (u32_at(r, 0), u32_at(r, 4));
         if x >= width || y >= height {
@@ -173,8 +184,8 @@ pub fn from_bytes(b: &[u8]) -> Result<Stream, DumpError> {
             depth: f32_at(r, 8),
             color: [f32_at(r, 12), f32_at(r, 16), f32_at(r, 20)],
             alpha: f32_at(r, 24),
-            // No primitive ids in the format: each fragment is its own primitive.
-            prim: i as u32,
+            // The first version has no keys: each fragment is its own primitive.
+            prim: if record == RECORD { u32_at(r, 28) } else { i as u32 },
         };
         f.to_kernel().map_err(|error| DumpError::BadFragment { index, error })?;
         frags.push(f);

@@ -1,4 +1,5 @@
-//! Scenes pinned by a hash of their stream; the dump format round-trips; bad dumps fail.
+//! Scenes pinned by a hash of their stream; the dump format round-trips with the keys, the
+//! first version still loads; bad dumps fail.
 
 use oit_lab::dump::{self, DumpError};
 use oit_lab::scenes::Scene;
@@ -138,8 +139,8 @@ fn sample() -> Stream {
     Scene::Particles.generate(40, 24, 3)
 }
 
-/// `s` as a dump reads it back: each fragment's primitive id is its index (the format has no
-/// primitive ids).
+/// `s` with each fragment's primitive id its index: what a dump of the first version
+/// (`OITFRAG1`, no keys) reads back.
 fn numbered(s: &Stream) -> Stream {
     let mut s = s.clone();
     for (i, f) in s.frags.iter_mut().enumerate() {
@@ -148,22 +149,84 @@ fn numbered(s: &Stream) -> Stream {
     s
 }
 
+/// The dump of `s` in the first version of the format: magic `OITFRAG1`, 28-byte fragments
+/// without the key (what `oit-lab dump` wrote before the key), written here byte by byte.
+fn to_bytes_v1(s: &Stream) -> Vec<u8> {
+    let mut b = dump::MAGIC_V1.to_vec();
+    for v in [s.width, s.height] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    for c in s.background {
+        b.extend_from_slice(&c.to_le_bytes());
+    }
+    b.extend_from_slice(&(s.frags.len() as u64).to_le_bytes());
+    for f in &s.frags {
+        for v in [f.pixel % s.width, f.pixel / s.width] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [f.depth, f.color[0], f.color[1], f.color[2], f.alpha] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    b
+}
+
+/// The rows of `s` composited by the kernel (MLAB 4, the default arithmetic, whose dithers
+/// the keys seed), as `evaluate` composites a dump: each fragment keyed by its primitive id.
+fn kernel_rows(s: &Stream) -> Vec<mlab::Row> {
+    use mlab::{Framebuffer, SpanFramebuffer};
+    let mut rows = vec![mlab::Row::EMPTY; SpanFramebuffer::<4>::rows_needed(s.width, s.height).unwrap()];
+    let mut fb = SpanFramebuffer::<4>::new_cleared(&mut rows, s.width, s.height).unwrap();
+    for f in &s.frags {
+        fb.insert(f.pixel % s.width, f.pixel / s.width, &f.to_kernel().unwrap())
+            .unwrap();
+    }
+    rows
+}
+
 #[test]
-fn dump_round_trips() {
+fn dump_round_trips_with_the_keys() {
     let s = sample();
-    // The scene's fragments carry their primitives' ids, which the format drops.
+    // The scene's fragments carry their primitives' ids, not their indices.
     assert_ne!(numbered(&s), s);
-    let s = numbered(&s);
     let bytes = dump::to_bytes(&s);
     assert_eq!(bytes.len(), dump::HEADER + dump::RECORD * s.frags.len());
-    assert_eq!(&bytes[..8], b"OITFRAG1");
-    assert_eq!(dump::from_bytes(&bytes), Ok(s.clone()));
+    assert_eq!(&bytes[..8], b"OITFRAG2");
+    let back = dump::from_bytes(&bytes).unwrap();
+    assert_eq!(back, s);
+    // `evaluate` replays the keyed renderer's bytes: the same rows as the scene's stream,
+    // which differ from those of the same fragments keyed by their index.
+    assert_eq!(kernel_rows(&back), kernel_rows(&s));
+    assert_ne!(kernel_rows(&numbered(&s)), kernel_rows(&s));
     let dir = std::env::temp_dir().join(format!("oit-lab-test-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("p.oitfrag");
     dump::write(&path, &s).unwrap();
     assert_eq!(dump::read(&path), Ok(s));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn first_version_dumps_still_load_keyed_by_index() {
+    let s = sample();
+    let v1 = to_bytes_v1(&s);
+    assert_eq!(v1.len(), dump::HEADER + dump::RECORD_V1 * s.frags.len());
+    assert_eq!(dump::from_bytes(&v1), Ok(numbered(&s)));
+    // Its own checks: a length of the new version's records is not one of the first's.
+    let mut short = v1.clone();
+    short.truncate(v1.len() - 1);
+    assert!(matches!(dump::from_bytes(&short), Err(DumpError::Truncated { .. })));
+    let mut x = v1.clone();
+    let last = v1.len() - dump::RECORD_V1;
+    x[last..last + 4].copy_from_slice(&1000u32.to_le_bytes());
+    assert!(matches!(
+        dump::from_bytes(&x),
+        Err(DumpError::PixelOutOfRange { x: 1000, .. })
+    ));
+    // A first-version header over records of the new size is refused by its length.
+    let mut mixed = dump::to_bytes(&s);
+    mixed[..8].copy_from_slice(&dump::MAGIC_V1);
+    assert!(matches!(dump::from_bytes(&mixed), Err(DumpError::TrailingBytes { .. })));
 }
 
 #[test]
@@ -184,9 +247,11 @@ fn dump_layout_is_little_endian() {
     assert_eq!(&b[8..16], &[3, 0, 0, 0, 2, 0, 0, 0]);
     assert_eq!(&b[16..20], &1.0f32.to_le_bytes());
     assert_eq!(&b[28..36], &[1, 0, 0, 0, 0, 0, 0, 0]);
-    // x = 2, y = 1, depth 2.0.
+    // x = 2, y = 1, depth 2.0, ..., key 9.
     assert_eq!(&b[36..44], &[2, 0, 0, 0, 1, 0, 0, 0]);
     assert_eq!(&b[44..48], &[0, 0, 0, 0x40]);
+    assert_eq!(&b[64..68], &[9, 0, 0, 0]);
+    assert_eq!(b.len(), 68);
 }
 
 #[test]
@@ -208,7 +273,7 @@ fn bad_dumps_are_errors() {
     let mut long = good.clone();
     long.push(0);
     assert!(matches!(dump::from_bytes(&long), Err(DumpError::TrailingBytes { .. })));
-    // A count so large that 36 + 28 n overflows.
+    // A count so large that 36 + 32 n overflows.
     let mut huge = good.clone();
     huge[28..36].copy_from_slice(&u64::MAX.to_le_bytes());
     assert!(matches!(dump::from_bytes(&huge), Err(DumpError::Truncated { .. })));

@@ -18,12 +18,18 @@ fn batch_into<F: Framebuffer, E: PixelFragment>(
     events: &[E],
     straight: bool,
 ) -> Result<(usize, Result<(), MlabStatus>), MlabStatus> {
+    let (width, height) = (fb.width(), fb.height());
     let mut batch = SpanBatcher::new(fb);
     for (i, e) in events.iter().enumerate() {
         let (x, y, rgba, depth, key) = e.parts();
-        let r = fragment(rgba, depth, key, straight)
-            .map_err(MlabStatus::from)
-            .and_then(|v| Ok(batch.insert(x, y, &v)?));
+        // The pixel, then the fragment (`docs/c.md`, "The order of the checks").
+        let r = if x >= width || y >= height {
+            Err(MlabStatus::OutOfBounds)
+        } else {
+            fragment(rgba, depth, key, straight)
+                .map_err(MlabStatus::from)
+                .and_then(|v| Ok(batch.insert(x, y, &v)?))
+        };
         if let Err(st) = r {
             batch.finish()?;
             return Ok((i, Err(st)));
@@ -47,8 +53,14 @@ unsafe fn insert_batch<E: PixelFragment>(
     guard(|| {
         // SAFETY: the caller's guarantee on `fb`.
         let s = unsafe { state(fb) }?;
-        check_ptr(fragments, align_of::<E>())?;
         check_ptr(inserted, align_of::<usize>())?;
+        if count == 0 {
+            // Nothing to insert: no fragment read (`fragments` may be null: an empty array).
+            // SAFETY: non-null and aligned (checked), writable (the caller's guarantee).
+            unsafe { inserted.write(0) };
+            return Ok(());
+        }
+        check_ptr(fragments, align_of::<E>())?;
         if count > isize::MAX as usize / size_of::<E>() {
             return Err(MlabStatus::SizeOverflow);
         }
@@ -66,9 +78,11 @@ unsafe fn insert_batch<E: PixelFragment>(
 /// through the kernel's span batcher (fragments gathered into 8-pixel span inserts inside
 /// the call): byte-identical to calling `mlab_insert_straight` on each in order, faster
 /// for MLAB when the fragments of a line come together (`docs/performance.md`). Stops at
-/// the first fragment that is invalid or outside: `*inserted` is then its index (the
-/// fragments before it are in the framebuffer, it and those after it are not) and the
-/// status says why; otherwise `*inserted = count`. Uses about 52 KiB of stack.
+/// the first fragment that is outside or invalid (its pixel checked first, then its values):
+/// `*inserted` is then its index (the fragments before it are in the framebuffer, it and
+/// those after it are not) and the status says why; otherwise `*inserted = count`. Count 0
+/// inserts nothing: `MLAB_STATUS_OK`, `*inserted = 0`, `fragments` not read (may be null, as
+/// an empty array's is). Uses about 52 KiB of stack.
 ///
 /// # Safety
 /// `fb` as for `mlab_insert_straight`; `fragments` is null or valid for reads of `count`

@@ -35,6 +35,10 @@ fn insert_typed<P: Pixel, const S: bool, K: KeyArg>(
     depth: f32,
     key: K,
 ) -> MlabStatus {
+    // The pixel, then the fragment (`docs/c.md`, "The order of the checks").
+    if x >= s.width || y >= s.height {
+        return MlabStatus::OutOfBounds;
+    }
     let fragment = match fragment([r, g, b, a], depth, key.key(), S) {
         Ok(f) => f,
         Err(e) => return e.into(),
@@ -104,6 +108,12 @@ static INSERT_PREMULTIPLIED_KEYED: [InsertTyped<u32>; 32] = insert_table!(false,
 /// A per-pixel insert, keyed or not (`K`): the state checked, then a tail call of the typed
 /// insert of its kind.
 ///
+/// Not under `guard` (no `catch_unwind`), for its cost per fragment: a panic here would
+/// abort the process (Rust's rule for a panic that reaches an `extern "C"` function), so this
+/// is right only while the kernel cannot panic, on any input (`docs/reliability.md`: it
+/// returns errors, and is fuzzed for it). A kernel change that can panic must put these
+/// inserts under `guard`.
+///
 /// # Safety
 /// As `mlab_insert_straight`.
 #[inline(always)]
@@ -133,10 +143,10 @@ unsafe fn insert_one<K: KeyArg>(
 
 /// Inserts one fragment of **straight** (not premultiplied) linear color `r, g, b`, alpha `a`
 /// and depth (smaller is nearer) into pixel `(x, y)`: Listing 1 (MLAB) or 2 (HT) of the
-/// paper, quantized by the framebuffer's arithmetic. Refused, nothing changed: an invalid
-/// fragment (NaN, infinite, negative color, alpha outside `[0, 1]`, `color * alpha` above
-/// 1, infinite depth; checked first, the first failing check in the order of `docs/c.md`),
-/// then a pixel outside. Without a key: the dithers of the default arithmetic are seeded by
+/// paper, quantized by the framebuffer's arithmetic. Refused, nothing changed: a pixel
+/// outside (checked first), then an invalid fragment (NaN, infinite, negative color, alpha
+/// outside `[0, 1]`, `color * alpha` above 1, infinite depth: the first failing check in
+/// the order of `docs/c.md`). Without a key: the dithers of the default arithmetic are seeded by
 /// the fragment's content, and re-roll when its depth changes (`mlab_insert_straight_keyed`).
 ///
 /// # Safety

@@ -25,8 +25,14 @@ unsafe fn insert_span<T: SpanFragments>(
     guard(|| {
         // SAFETY: the caller's guarantee on `fb`.
         let s = unsafe { state(fb) }?;
-        check_ptr(fragments, align_of::<T>())?;
         check_ptr(refused, 1)?;
+        if mask == 0 {
+            // Nothing to insert: no fragment read, no coordinate checked (`docs/c.md`).
+            // SAFETY: non-null (checked), writable (the caller's guarantee).
+            unsafe { refused.write(0) };
+            return Ok(());
+        }
+        check_ptr(fragments, align_of::<T>())?;
         // SAFETY: non-null, aligned (checked), readable (the caller's guarantee); a copy.
         let lanes = unsafe { fragments.read() }.lanes();
         let invalid = with_grid!(s, f => {
@@ -54,11 +60,13 @@ unsafe fn insert_span<T: SpanFragments>(
 
 /// Inserts the lanes of `*fragments` that are on in `mask` (bit `i`: pixel `(x + i, y)`),
 /// straight color, 8 at a time: byte-identical to `mlab_insert_straight` lane by lane, in
-/// lane order. `x` need not be a multiple of 8; every lane that is on must lie inside
-/// (otherwise `MLAB_STATUS_OUT_OF_BOUNDS` and nothing changes). `*refused` gets the mask of
-/// the lanes that were on and held an invalid fragment: these are skipped, the valid lanes
-/// are inserted, and the status is the first refused lane's fragment error (0 refused:
-/// `MLAB_STATUS_OK`). On any other error `*refused` is unchanged.
+/// lane order. `x` need not be a multiple of 8; every lane that is on must lie inside,
+/// checked before any fragment (otherwise `MLAB_STATUS_OUT_OF_BOUNDS` and nothing changes).
+/// `*refused` gets the mask of the lanes that were on and held an invalid fragment: these
+/// are skipped, the valid lanes are inserted, and the status is the first refused lane's
+/// fragment error (0 refused: `MLAB_STATUS_OK`). On any other error `*refused` is unchanged.
+/// Mask 0 inserts nothing: `MLAB_STATUS_OK` and `*refused = 0` whatever `x`, `y` and
+/// `fragments` (not read; may be null).
 ///
 /// # Safety
 /// `fb` as for `mlab_insert_straight`; `fragments` is null or valid for a read of one
