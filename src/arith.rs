@@ -16,7 +16,8 @@
 //!
 //! `h` is the inserted fragment's hash in its pixel, [`fragment_hash`]`(key, pixel)`: with a
 //! stable key ([`Fragment::with_key`], the primitive's id) a fragment is rounded the same way
-//! in every frame, so an image holds still while the camera moves; without one the key is the
+//! in every frame, so its rounding does not re-roll while the camera moves (it reduces the
+//! flicker, it does not remove it: `docs/quality.md`); without one the key is the
 //! fragment's content, which changes with its depth (`docs/layout.md`, `docs/quality.md`).
 //!
 //! # Why
@@ -128,8 +129,8 @@ pub trait Arithmetic:
 pub struct Paper;
 
 /// The default arithmetic: dithered products and fragment quantization (unbiased on
-/// average, no transmittance stall) and a tail that does not saturate on dense content
-/// ([`Tail`]).
+/// average, no transmittance stall) and a tail that saturates far later than the paper's
+/// ([`Tail`]; [`Grid::saturated_pixels`](crate::Grid::saturated_pixels) counts where it does).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Unbiased;
 
