@@ -7,7 +7,14 @@ use std::path::{Path, PathBuf};
 
 fn main() {
     println!("cargo::rustc-check-cfg=cfg(mlab_gpu_no_driver)");
-    for var in ["CI", "MLAB_GPU_TESTS", "VK_ICD_FILENAMES", "VK_DRIVER_FILES", "XDG_DATA_DIRS", "XDG_CONFIG_DIRS"] {
+    for var in [
+        "CI",
+        "MLAB_GPU_TESTS",
+        "VK_ICD_FILENAMES",
+        "VK_DRIVER_FILES",
+        "XDG_DATA_DIRS",
+        "XDG_CONFIG_DIRS",
+    ] {
         println!("cargo::rerun-if-env-changed={var}");
     }
     if std::env::var("CI").is_ok_and(|v| v == "true") {
@@ -53,7 +60,9 @@ fn vulkan_driver_present() -> bool {
             println!("cargo::rerun-if-changed={}", parent.display());
         }
         let manifests = std::fs::read_dir(dir).into_iter().flatten().flatten();
-        found |= manifests.into_iter().any(|e| e.path().extension().is_some_and(|x| x == "json"));
+        found |= manifests
+            .into_iter()
+            .any(|e| e.path().extension().is_some_and(|x| x == "json"));
     }
     found
 }
