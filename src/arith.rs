@@ -162,7 +162,7 @@ impl Arithmetic for Unbiased {
     /// With the merge dither `d = ((h & 0xffff) * 255) >> 16`:
     /// `T = floor((T_front * T_back + d) / 255)`,
     /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255,
-    /// and `z` the opacity-weighted depth of the two rows ([`centroid_depth`]; the program is
+    /// and `z` the opacity-weighted depth of the two rows (the program is
     /// `docs/layout.md`'s, "merged depth").
     #[inline(always)]
     fn merge(front: Row, back: Row, h: u32) -> Row {
