@@ -16,7 +16,8 @@
 //!
 //! `h` is the inserted fragment's hash in its pixel, [`fragment_hash`]`(key, pixel)`: with a
 //! stable key ([`Fragment::with_key`], the primitive's id) a fragment is rounded the same way
-//! in every frame, so an image holds still while the camera moves; without one the key is the
+//! in every frame, so its rounding does not re-roll while the camera moves (it reduces the
+//! flicker, it does not remove it: `docs/quality.md`); without one the key is the
 //! fragment's content, which changes with its depth (`docs/layout.md`, `docs/quality.md`).
 //!
 //! # Why
@@ -128,8 +129,8 @@ pub trait Arithmetic:
 pub struct Paper;
 
 /// The default arithmetic: dithered products and fragment quantization (unbiased on
-/// average, no transmittance stall) and a tail that does not saturate on dense content
-/// ([`Tail`]).
+/// average, no transmittance stall) and a tail that saturates far later than the paper's
+/// ([`Tail`]; [`Grid::saturated_pixels`](crate::Grid::saturated_pixels) counts where it does).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Unbiased;
 
@@ -161,8 +162,8 @@ impl Arithmetic for Unbiased {
     /// With the merge dither `d = ((h & 0xffff) * 255) >> 16`:
     /// `T = floor((T_front * T_back + d) / 255)`,
     /// `A = A_front + floor((A_back * T_front + 254 - d) / 255)` per channel, saturating at 255,
-    /// and `z` the opacity-weighted depth of the two rows (`docs/layout.md`: `z_front` where
-    /// `T_front < 160` or the back row adds no opacity).
+    /// and `z` the opacity-weighted depth of the two rows (the program is
+    /// `docs/layout.md`'s, "merged depth").
     #[inline(always)]
     fn merge(front: Row, back: Row, h: u32) -> Row {
         let merged = unbiased_merge(front, back, merge_dither(h));
@@ -171,7 +172,7 @@ impl Arithmetic for Unbiased {
     }
 
     /// To nearest, as the paper's ([`Paper::quantize`](Arithmetic::quantize)), except for faint fragments
-    /// (`alpha * 255 < 16`, where half a unit of rounding is more than 3 % of the value),
+    /// (`alpha * 255 < 16`, where half a unit of rounding is more than 1/32 of the value),
     /// which are quantized with the fragment dither `u = ((h >> 24) + 0.5) / 256`.
     ///
     /// Why only those (measured with `oit-lab faint`, 3 seeds, `docs/quality.md`): dithering
@@ -249,19 +250,9 @@ pub(crate) fn fragment_dither(h: u32) -> f32 {
 /// toward the back row's ([`centroid_depth`]): a front row at least this transparent.
 pub(crate) const CENTROID_MIN_T: u32 = 160;
 
-/// The weight of the back row in the depth of a merge, in 1/65536ths (`0..=65280`): its
-/// share of the merged opacity, `cb / (af + cb)`, in 1/256ths rounded down and capped at
-/// 255/256, with `af = 255 * (255 - T_front)` and `cb = (255 - T_back) * T_front` (the
-/// opacities of the front row and of the back row seen through it, times 65025). 0 when
-/// `cb = 0` (an opaque front, an empty or transparent back) and when `T_front < 160`.
-///
-/// ```text
-/// p  = T_front * T_back
-/// cb = 255 * T_front - p           // = (255 - T_back) * T_front
-/// w  = T_front >= 160 ? min(floor(256 * cb / (65025 - p)), 255) * 256 : 0
-/// ```
-///
-/// (`65025 - p` is 0 only where `cb` is 0 too: divide by 1 there.) Why 1/256ths: the lanes
+/// The weight of the back row in the depth of a merge, in 1/65536ths (`0..=65280`): `w` of
+/// the merged depth's program in `docs/layout.md` (its one description): the back row's share
+/// of the merged opacity in 1/256ths, rounded down and capped. Why 1/256ths: the lanes
 /// compute `floor(256 * cb / den)` as `trunc(256 * (f32(cb) / f32(den)))`, exact with no
 /// correction step: the f32 quotient is within `2^-25` (relative) of `cb / den <= 1`, so
 /// `256 *` it is within `2^-17` of `256 * cb / den`, whose distance to the next integer

@@ -101,6 +101,10 @@ impl Fragment {
 
     /// A fragment from straight (non-premultiplied) color, alpha and depth. The stored color is
     /// `color * alpha` (one f32 multiply per channel), which must not exceed 1.
+    ///
+    /// NaN, infinity and a negative value are checked on the given `color`, not on the
+    /// product (a NaN or infinite color is refused at alpha 0 too); only the bound `<= 1` is
+    /// checked on `color * alpha`. The order of the errors is [`Fragment::premultiplied`]'s.
     #[inline]
     pub fn straight(color: Vec3, alpha: f32, depth: f32) -> Result<Fragment, FragmentError> {
         // A straight color may exceed 1, its product with alpha may not; an infinite channel
@@ -174,7 +178,10 @@ impl Fragment {
     }
 
     /// A fragment from premultiplied color and transmittance `t = 1 - alpha` in `[0, 1]`.
-    /// Alpha is computed as `1 - t` in f32 (exact for `t >= 0.5`).
+    /// Alpha is computed as `1 - t` in f32 (exact for `t >= 0.5`). The range is checked on `t`
+    /// itself, before the subtraction: `t` outside `[0, 1]` is
+    /// [`FragmentError::AlphaOutOfRange`] even where `1 - t` rounds into range (`t = -1e-10`
+    /// gives `1 - t = 1.0` in f32, and is refused).
     pub fn with_transmittance(color: Vec3, transmittance: f32, depth: f32) -> Result<Fragment, FragmentError> {
         if transmittance.is_nan() {
             return Err(FragmentError::NanAlpha);
@@ -199,6 +206,14 @@ impl Fragment {
     /// which changes with its depth: the dithers re-roll every frame, and a dense faint
     /// layer (fog) shimmers under camera motion (`docs/quality.md`). [`Paper`](crate::Paper)
     /// has no dither and ignores the key.
+    ///
+    /// **The contract: a key is unique per primitive among the fragments of one pixel.** Two
+    /// fragments of different primitives with the same key in the same pixel get the same hash
+    /// there, so both dithers (the faint fragment's quantization and the merge's rounding) draw
+    /// the same value for every one of them: the rounding errors no longer average out, and a
+    /// pixel crossed by many such fragments can stall or drift further from the exact image
+    /// than [`Paper`](crate::Paper)'s rounding to nearest (`docs/layout.md`, "Fragment key").
+    /// One primitive may cover many pixels with its key: the pixel is part of the hash.
     ///
     /// ```
     /// use mlab::glam::Vec3;

@@ -152,13 +152,14 @@
 //! - The merge is exact unorm8 integer arithmetic, reproducible on any machine and in a
 //!   shader, in one of two arithmetics ([`arith`]), a type parameter of every kernel type:
 //!   [`Unbiased`] (the default: a dithered merge and dithered faint fragments, no
-//!   transmittance stall on many faint layers, and a tail that does not saturate on dense
-//!   content) or [`Paper`] (the paper's
+//!   transmittance stall on many faint layers, and a tail that saturates far later than the
+//!   paper's: never on the lab's scenes, on a few pixels of a dense point cloud;
+//!   [`Grid::saturated_pixels`] counts them) or [`Paper`] (the paper's
 //!   round-to-nearest and 3 x 10-bit tail, bit for bit): `BlendingArray<4>` is
 //!   `BlendingArray<4, Unbiased>`; `BlendingArray<4, Paper>` is the paper's.
 //!
 //! The documents named here (`docs/layout.md`, `docs/algorithm.md`, `docs/performance.md`,
-//! ...) are in the crate's source, beside `src/`.
+//! `docs/quality.md`) and `CHANGELOG.md` are in the crate's source, beside `src/`.
 
 #![no_std]
 #![forbid(unsafe_code)]

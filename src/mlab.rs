@@ -15,7 +15,8 @@
 //!
 //! Arithmetic: the merge runs in exact unorm8 integers, in one of two arithmetics
 //! ([`crate::arith`]): the default [`Unbiased`] rounds each product `floor((a * b + d) / 255)`
-//! with a dither `d` hashed from the two rows (no transmittance stall on faint layers), the
+//! with a dither `d` from the inserted fragment's hash in its pixel, also when the rows merged
+//! are two older ones (`docs/layout.md`; no transmittance stall on faint layers), the
 //! paper's [`Paper`](crate::Paper) rounds to nearest. Both are deterministic, need no
 //! floating point, and a shader reproduces them bit for bit. Merging with the empty row is
 //! the identity in both, so an array that is not full needs no special case.

@@ -26,7 +26,7 @@ pub(crate) trait RowLanes: Copy {
     /// row stored back to the slot `b` was loaded from and the row carried to the next layer.
     /// A lane type may compute the stored one with other instructions so that the compiler
     /// cannot fold its select and the store into a masked store (`vmaskmovpd`, which AMD CPUs
-    /// microcode: issue 31).
+    /// microcode; `benches/asm/check.sh` fails on it).
     #[inline(always)]
     fn swap(mask: Self::Mask, a: Self, b: Self) -> (Self, Self) {
         (Self::select(mask, a, b), Self::select(mask, b, a))

@@ -225,6 +225,10 @@ fn compare(what: &str, got: &[u32], want: &[u32], input: impl Fn(usize) -> Strin
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn the_shader_quantizes_exactly_as_the_kernel_on_the_critical_pairs_and_a_sample_of_all() {
     let Some(gpu) = common::gpu("quantize") else { return };
     // Every critical pair, both signs of zero, and every dither for a sample of v.
@@ -247,6 +251,10 @@ fn the_shader_quantizes_exactly_as_the_kernel_on_the_critical_pairs_and_a_sample
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn the_shader_multiplies_by_255_and_adds_as_the_cpu_rounds() {
     let Some(gpu) = common::gpu("f32 emulation") else {
         return;

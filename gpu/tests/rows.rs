@@ -67,6 +67,10 @@ fn same_in_bands<T: PartialEq + std::fmt::Debug>(c: &mut Compositor, run: impl F
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
     let Some(gpu) = gpu("random_streams") else { return };
     let mut rng = Rng(0x6d6c_6162_6770_7531);
@@ -101,6 +105,10 @@ fn random_streams_match_the_cpu_for_every_method_size_and_arithmetic() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn every_layout_and_arithmetic_on_the_same_stream() {
     let Some(gpu) = gpu("layouts") else { return };
     let mut rng = Rng(7);
@@ -181,6 +189,10 @@ fn adversarial(rng: &mut Rng, w: u32, h: u32) -> Vec<Vec<GpuFragment>> {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn adversarial_streams_match_the_cpu() {
     let Some(gpu) = gpu("adversarial") else { return };
     let mut rng = Rng(23);
@@ -209,6 +221,10 @@ fn colors(words: &[u32]) -> Vec<u32> {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn stable_keys_seed_unbiaseds_dithers_on_the_gpu_as_on_the_cpu_and_paper_ignores_them() {
     let Some(gpu) = gpu("keys") else { return };
     // A faint fog: 40 layers over every pixel of 13 x 3 (alpha 0.03: faint, dithered), each
@@ -247,6 +263,10 @@ fn stable_keys_seed_unbiaseds_dithers_on_the_gpu_as_on_the_cpu_and_paper_ignores
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
     let Some(gpu) = gpu("paper_tail_saturation") else {
         return;
@@ -266,6 +286,10 @@ fn the_paper_tails_count_and_alpha_saturate_on_the_gpu_as_on_the_cpu() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn bands_split_by_the_binding_limit_give_the_same_words() {
     let Some(gpu) = gpu("bands") else { return };
     let mut rng = Rng(99);
@@ -284,6 +308,10 @@ fn bands_split_by_the_binding_limit_give_the_same_words() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn bad_input_is_a_typed_error_not_a_panic() {
     let Some(gpu) = gpu("errors") else { return };
     let c = Compositor::new(&gpu, Layers::Mlab(2), ArithKind::Paper, Layout::Spans).expect("compositor");
@@ -356,6 +384,10 @@ fn bad_input_is_a_typed_error_not_a_panic() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn the_exported_wgsl_is_what_the_compositor_runs() {
     let Some(gpu) = gpu("exported_wgsl") else { return };
     for layers in all_layers() {
@@ -389,6 +421,10 @@ fn the_exported_wgsl_is_what_the_compositor_runs() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
     let Some(gpu) = gpu("long_pixels") else { return };
     // Pixel 0: 100 000 fragments (lavapipe ends an invocation's loops after 65,535 iterations in
@@ -426,6 +462,10 @@ fn pixels_with_more_fragments_than_one_dispatch_takes_continue_in_the_next() {
 mod raster;
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
     let Some(gpu) = gpu("torus") else { return };
     let (w, h) = (160, 120);
@@ -457,6 +497,10 @@ fn the_rasterizer_examples_torus_gives_the_same_rows_on_the_gpu() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn mlab_rgba8_from_the_gpus_integer_resolve_is_the_kernels() {
     let Some(gpu) = gpu("rgba8") else { return };
     let mut rng = Rng(0x5247_4241);
@@ -539,6 +583,10 @@ fn shuffled_coplanar(rng: &mut Rng, w: u32, h: u32, per: u32) -> Vec<GpuFragment
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn the_gpu_sort_gives_the_stable_order_and_the_cpus_rows() {
     let Some(gpu) = gpu("gpu_sort") else { return };
     let mut rng = Rng(0x736f_7274);
@@ -573,6 +621,10 @@ fn the_gpu_sort_gives_the_stable_order_and_the_cpus_rows() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn the_gpu_sort_over_several_bands_is_the_stable_order() {
     let Some(gpu) = gpu("gpu_sort_bands") else { return };
     let mut rng = Rng(0x6261_6e64);
@@ -589,6 +641,10 @@ fn the_gpu_sort_over_several_bands_is_the_stable_order() {
 }
 
 #[test]
+#[cfg_attr(
+    mlab_gpu_no_driver,
+    ignore = "no Vulkan driver when mlab-gpu was built (apt-get install mesa-vulkan-drivers libvulkan1; CI=true fails instead)"
+)]
 fn an_unstable_sort_would_fail_these_tests() {
     let Some(gpu) = gpu("unstable_sort") else { return };
     let mut rng = Rng(0x756e_7374);

@@ -225,7 +225,8 @@ pub fn mlab_resolve<const M: usize>(span: &[[Row; LANES]; M]) -> ResolvedLanes {
 
 /// [`mlab_resolve`] of 8 pixels stored pixel-major (`[pixel][row]`, as in an
 /// [`MlabFramebuffer`](crate::MlabFramebuffer)), without transposing them first. (Always
-/// inlined: passed as a function value, it was a call per span on SSE2, 1.04x the instructions.)
+/// inlined: passed as a function value, it was a call per span on SSE2, which costs more than
+/// its body saves: `docs/performance.md`, resolves.)
 #[inline(always)]
 pub(crate) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES]) -> ResolvedLanes {
     resolve::mlab_resolve_pixel_major(pixels).lanes()

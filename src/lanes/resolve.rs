@@ -95,8 +95,8 @@ pub(super) fn mlab_resolve_pixel_major<const M: usize>(pixels: &[[Row; M]; LANES
     let layer = |j: usize| {
         let words = if M == 1 {
             // The rows are contiguous: two vector loads, then the color words in
-            // [`POSITION`] order as for a span's layer ([`words0`]). (The inserts below took
-            // 11-13 % longer on AVX2 than on SSE2 here.)
+            // [`POSITION`] order as for a span's layer ([`words0`]). (Eight 32-bit inserts
+            // instead ran slower on AVX2 than on SSE2: docs/performance.md, resolves.)
             let q = |p: usize| cast::<Row, u64>(pixels[p][j]);
             let (a, b) = (
                 u64x4::new([q(0), q(1), q(2), q(3)]),

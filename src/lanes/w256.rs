@@ -271,8 +271,8 @@ impl<const S: bool> RowLanes for Lanes8<S> {
     }
     /// With `SIGN`, the stored row is `a ^ b ^ next` (two xors) rather than a second
     /// `vblendvpd`: LLVM folds a `vblendvpd` whose result is stored where its second operand
-    /// was loaded from into `vmaskmovpd`, which AMD CPUs microcode (1.4-2.2x slower MLAB
-    /// inserts on Zen 4, issue 31). The row the next layer waits on stays one `vblendvpd`.
+    /// was loaded from into `vmaskmovpd`, which AMD CPUs microcode (much slower MLAB inserts
+    /// on Zen 2-4; `benches/asm/check.sh` fails on it). The row the next layer waits on stays one `vblendvpd`.
     #[inline(always)]
     fn swap(mask: Mask8<S>, x: Self, y: Self) -> (Self, Self) {
         let next = Self::select(mask, y, x);
@@ -289,9 +289,9 @@ impl<const S: bool> RowLanes for Lanes8<S> {
     #[inline(always)]
     fn merge<A: Arithmetic>(front: Self, back: Self, d: Dither8) -> Self {
         match A::KIND {
-            // All 8 merges in one register, then back to the rows' low dwords: 0.83-0.90x
-            // the time of one merge per register with AVX2, but 1.43x at M = 8 on SSE2
-            // (docs/performance.md, "The merge on one register").
+            // All 8 merges in one register, then back to the rows' low dwords: faster than
+            // one merge per register with AVX2, slower on SSE2, where the packing costs more
+            // than it saves (docs/performance.md, span lanes).
             Kind::Paper if PACK_PAPER_MERGE => {
                 let c = merge_words_paper(words0(front), words0(back));
                 Lanes8 {

@@ -269,7 +269,8 @@ pub fn to_rgba8(pixel: Vec4) -> [u8; 4] {
 }
 
 /// RGBA16F (IEEE half) from a pixel, rounded to nearest even; values above 1 (additive
-/// light) are kept, above 65504 they become infinity.
+/// light) are kept; values below 65520 round to at most 65504 (the largest finite half),
+/// 65520 and above become infinity.
 #[inline]
 pub fn to_rgba16f(pixel: Vec4) -> [f16; 4] {
     pixel.to_array().map(f16::from_f32)

@@ -13,8 +13,9 @@ use crate::tail::TailFormat;
 use bytemuck::cast;
 use wide::{f32x8, i16x8, i16x16, i16x32, i32x8, u16x8, u16x16, u16x32, u32x8};
 
-// Every product below is a 16-bit one (issue 31: `wide` has no 32-bit lane multiply or
-// unsigned 32-bit min on SSE2, and emulated them at 228 instructions per pixel): `pmaddwd`
+// Every product below is a 16-bit one (`wide` has no 32-bit lane multiply or unsigned
+// 32-bit min on SSE2, and its emulation lane by lane dominated the resolve: docs/performance.md,
+// resolves): `pmaddwd`
 // (`i16x16::dot`) where both factors are below 2^15, `pmulhuw` and `pmullw` where they are
 // below 2^16. The tail's Horner sums and bit products run in 16-bit lanes, 8 pixels in one
 // 128-bit register; values of 17 bits (T, the first factor of the products) keep their top

@@ -3,7 +3,8 @@
 //!
 //! MLAB's form: `ssse3.rs` (a byte shuffle and `pmulhrsw` per layer) everywhere but x86
 //! without SSSE3 (the x86-64 baseline, SSE2), where `wide` would emulate those lane by lane
-//! (195 instructions per pixel at M = 4) and `sse2.rs` has a form of its own.
+//! (several times the cost of the resolve itself: `docs/performance.md`, resolves) and
+//! `sse2.rs` has a form of its own.
 
 /// `$e` with the const `$opaque` true and `$bg` the background's channels for an opaque
 /// background, else with `$opaque` false and `$bg` zero: the background's case chosen once,
