@@ -34,7 +34,7 @@ trap 'rm -rf "$work"' EXIT
 # local, so that the standard library and kernel inside cannot clash with the program's. The
 # LLVM bitcode sections of the standard library's objects are dropped: the linker plugins of
 # an older LLVM fail on them, and nothing links them.
-nm -g --defined-only "$built/libmlab_capi.a" 2>/dev/null | awk 'NF == 3 && $2 == "T" && $3 ~ /^mlab_/ { print $3 }' |
+{ nm -g --defined-only "$built/libmlab_capi.a" 2>/dev/null || true; } | awk 'NF == 3 && $2 == "T" && $3 ~ /^mlab_/ { print $3 }' |
   sort -u >"$work/api.txt"
 ld -r --gc-sections $(sed 's/^/-u /' "$work/api.txt") --whole-archive "$built/libmlab_capi.a" -o "$work/all.o"
 objcopy --keep-global-symbols="$work/api.txt" --remove-section=.llvmbc --remove-section=.llvmcmd \
