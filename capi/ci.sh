@@ -40,7 +40,7 @@ VALGRIND=(valgrind -q --error-exitcode=1 --leak-check=full --errors-for-leak-kin
 cargo build --release -p mlab-capi
 lib=target/release
 grep -oE '\bmlab_[a-z0-9_]+\(' capi/include/mlab.h | tr -d '(' | sort -u >"$out/api.txt"
-readelf -d "$lib/libmlab_capi.so" | grep -q "SONAME.*\[libmlab\.so\.$(sed -n 's/^#define MLAB_ABI_VERSION //p' capi/include/mlab.h)\]"
+readelf -d "$lib/libmlab_capi.so" | grep "SONAME.*\[libmlab\.so\.$(sed -n 's/^#define MLAB_ABI_VERSION //p' capi/include/mlab.h)\]" >/dev/null
 nm -D --defined-only "$lib/libmlab_capi.so" | awk '{ print $3 }' | sort | diff "$out/api.txt" -
 "${CC:-cc}" -std=c99 -Wall -Wextra -Werror -pedantic -fsyntax-only -x c capi/include/mlab.h
 "${CXX:-c++}" -std=c++11 -Wall -Wextra -Werror -pedantic -fsyntax-only -x c++ capi/include/mlab.h
@@ -69,7 +69,7 @@ nm -D --defined-only "$out/prefix/lib/libmlab.so" | awk '{ print $3 }' | sort | 
 # The lines of docs/c.md ("Install").
 "${CC:-cc}" -std=c11 -O2 capi/examples/triangles.c $(pkg-config --cflags --libs mlab) \
   -Wl,-rpath,"$(pkg-config --variable=libdir mlab)" -o "$out/triangles-shared"
-ldd "$out/triangles-shared" | grep -q "libmlab\.so\.[0-9]* => $out/prefix/lib/"
+ldd "$out/triangles-shared" | grep "libmlab\.so\.[0-9]* => $out/prefix/lib/" >/dev/null
 run c-shared "$out/triangles-shared"
 "${CC:-cc}" -std=c11 -O2 capi/examples/triangles.c $(pkg-config --cflags --libs mlab-static) -o "$out/triangles-static"
 if ldd "$out/triangles-static" | grep libmlab; then echo "linked the shared library"; exit 1; fi
